@@ -1,0 +1,48 @@
+// volmap: geometric error models, compensation tables and NC post-processing
+// for machine tools. Exit status: 0 success, 2 usage error, 1 anything else
+// (one line on stderr naming the file and line and what is wrong).
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <map>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "core/cli/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "volmap: machine-tool geometric error models, compensation tables and "
+      "NC post-processing (Hsu; Lei & Hsu 2003)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("volmap 0.1.0"));
+  std::map<const CLI::App*, volmap::cli::Runner> runners;
+  auto add = [&](volmap::cli::Runner r) {
+    runners[app.get_subcommands({}).back()] = std::move(r);
+  };
+  add(volmap::cli::register_sensitivity(app));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "volmap: " << e.what() << " (see volmap --help)\n";
+    return 2;
+  }
+  try {
+    for (const CLI::App* sub : app.get_subcommands()) return runners.at(sub)();
+  } catch (const std::exception& e) {
+    std::string msg = e.what();
+    for (char& c : msg)
+      if (c == '\n') c = ' ';
+    std::cerr << "volmap: " << msg << "\n";
+    return 1;
+  }
+  return 2;
+}

@@ -1,0 +1,136 @@
+// The homogeneous-transformation (HTM) error model of a serial machine, in
+// two forms:
+//  - exact: full products of 4x4 transforms (stored as Eigen::Isometry3d),
+//    error rotations R(EA,EB,EC) = Rz(EC) Ry(EB) Rx(EA) evaluated exactly;
+//  - first order: small angles, products of two errors dropped (Hsu eq. 13-16
+//    "using small-angle approximations ... second-order errors negligible";
+//    Lei & Hsu section 3). The two agree to second order in the errors.
+//
+// Joint j with errors (Hsu eqs. 1, 4, 5, 6 generalised; frames base first):
+//   linear:  T_parent_j = Trans(offset) * L * Trans(q d) * E(q)
+//   rotary:  T_parent_j = Trans(offset) * L * E(q) * Rot(d, q)
+// L = [R(EA0K,EB0K,EC0K) | (EX0K,EY0K,EZ0K)] holds the location errors,
+// E(q) = [R(EAK,EBK,ECK) | (EXK,EYK,EZK)] the component errors at q. Rotary
+// component errors are error motions in the non-rotating frame (ISO 230-7).
+//
+// Pose error dv = (dP, dQ): actual minus nominal tool tip and tool axis, in
+// workpiece coordinates (Lei & Hsu eqs. 16-17 with ISO 230-2 sign; the paper
+// writes ideal minus actual, erratum E-LH2 in docs/errata.md).
+//
+// Formulations (Hsu):
+//  - kDependent (Table I): lever arms from the kinematic parameters (offsets).
+//  - kIndependent (Table II): each linear axis's translational component
+//    errors are as measured at the tool tip with the other axes at the
+//    machine's measured_at pose, so they already hold the Abbe terms of that
+//    pose; the lever of an angular error is the tool tip's displacement from
+//    that pose. Location errors of linear axes pivot at the tool tip of the
+//    measurement pose with the axis itself at 0. Rotary axes are unchanged.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <memory>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "core/error_set.h"
+#include "core/machine.h"
+
+namespace volmap {
+
+enum class Formulation : std::uint8_t { kDependent, kIndependent };
+
+struct ModelOptions {
+  Formulation formulation = Formulation::kIndependent;
+  OutsidePolicy outside = OutsidePolicy::kError;
+};
+
+/// Tool pose error in workpiece coordinates: dP in mm, dQ unitless.
+struct PoseError {
+  Eigen::Vector3d dP_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d dQ = Eigen::Vector3d::Zero();
+};
+
+/// Approach direction per AxisVector index: +1, -1, or 0 (unknown / mean).
+using ApproachDirections = std::array<std::int8_t, 6>;
+
+/// Small transform of one error frame: translation delta (mm), rotation eps
+/// (rad, about the frame's x, y, z).
+struct SmallTransform {
+  Eigen::Vector3d delta_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d eps_rad = Eigen::Vector3d::Zero();
+};
+
+/// Exact rotation Rz(c) Ry(b) Rx(a) for small angles (a, b, c) = eps.
+Eigen::Matrix3d small_rotation_exact(const Eigen::Vector3d& eps_rad);
+
+class ErrorModel {
+ public:
+  /// Binds the errors to the machine's joints. Throws std::invalid_argument
+  /// when the errors name an axis the machine does not have.
+  ErrorModel(Machine machine, ErrorSet errors, ModelOptions options = {});
+
+  const Machine& machine() const { return machine_; }
+  const ErrorSet& errors() const { return errors_; }
+  const ModelOptions& options() const { return options_; }
+
+  /// Actual tool pose (exact HTM products) at axis position u.
+  ToolPose actual(const AxisVector& u, const ApproachDirections& dir = {}) const;
+  /// dv = actual - nominal, exact.
+  PoseError exact(const AxisVector& u, const ApproachDirections& dir = {}) const;
+  /// dv to first order in the errors.
+  PoseError first_order(const AxisVector& u,
+                        const ApproachDirections& dir = {}) const;
+
+  /// First-order lever data of one joint at u: how a small transform of its
+  /// location frame L or component frame C moves the tool pose in workpiece
+  /// coordinates:  dP = sign R_w_L (delta + eps x lever),  dQ = sign R_w_L
+  /// (eps x axis_L). sign is -1 for the workpiece chain (an error that moves
+  /// the workpiece by +delta moves the tool by -delta relative to it).
+  struct JointLever {
+    AxisName axis;
+    bool rotary;
+    double sign;
+    Eigen::Matrix3d R_w_L;
+    Eigen::Vector3d lever_location_mm;   ///< for the location errors
+    Eigen::Vector3d lever_component_mm;  ///< for the component errors
+    Eigen::Vector3d axis_L;              ///< tool axis in frame L
+  };
+  /// Levers of every joint, workpiece chain then tool chain (base first).
+  void levers(const AxisVector& u, std::vector<JointLever>& out) const;
+
+  /// Number of evaluations that were clamped (OutsidePolicy::kClamp).
+  std::uint64_t clamped_count() const { return clamped_->load(); }
+
+ private:
+  struct BoundJoint {
+    const Joint* joint = nullptr;
+    ChainSide side = ChainSide::kWorkpiece;
+    const AxisErrors* components = nullptr;  ///< null: no component errors
+    SmallTransform location;                 ///< effective, see .cc
+    Eigen::Isometry3d T_parent_loc;          ///< Trans(offset) * L, exact
+    /// Independent formulation: tool tip in this joint's location frame at
+    /// the measurement pose with the joint at 0 (nominal). Zero otherwise.
+    Eigen::Vector3d r_meas_mm = Eigen::Vector3d::Zero();
+    bool independent = false;
+  };
+
+  SmallTransform component_errors(const BoundJoint& bj, double q, int dir) const;
+  Eigen::Isometry3d chain_actual(const std::vector<BoundJoint>& chain,
+                                 const AxisVector& u,
+                                 const ApproachDirections& dir) const;
+
+  Machine machine_;
+  ErrorSet errors_;
+  ModelOptions options_;
+  std::vector<BoundJoint> workpiece_;
+  std::vector<BoundJoint> tool_;
+  std::shared_ptr<std::atomic<std::uint64_t>> clamped_ =
+      std::make_shared<std::atomic<std::uint64_t>>(0);
+};
+
+}  // namespace volmap

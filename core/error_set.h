@@ -1,0 +1,111 @@
+// The geometric errors of a machine as loaded from an errors CSV
+// (spec: shared/spec/errors.md), in internal units: lengths in mm, angles in
+// rad, for both axis positions and error values.
+//
+// Interpolation between tabulated positions: piecewise cubic Hermite with
+// Fritsch–Carlson monotone slopes (PCHIP, Fritsch & Carlson 1980; end slopes
+// by the one-sided three-point formula, as MATLAB's pchip). Why: it is C1
+// (no kinks in the error field, so corrected tool paths stay smooth), local
+// (one bad reading disturbs two intervals, not the whole axis as a natural
+// spline would) and it never overshoots the measured values (a spline can
+// invent an error larger than any the laser saw). Two rows: linear. One row:
+// constant.
+//
+// Outside the table: OutsidePolicy::kError (default) refuses with the axis,
+// position, table range and the file:line of the block; kClamp holds the end
+// value and counts the clamped evaluations. A rotary axis whose table spans
+// exactly 360 degrees is periodic: positions wrap, nothing is outside.
+//
+// Bidirectional tables (dir column): evaluation takes the approach direction
+// (+1, -1); direction 0 (unknown, or the axis stands still) gives the mean of
+// the two directions. A block with rows of one direction only serves both.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/axis_name.h"
+
+namespace volmap {
+
+enum class OutsidePolicy : std::uint8_t { kError, kClamp };
+
+/// The six component errors of one axis in one approach direction, on one
+/// knot vector (the union of the knots of every component's own table; a
+/// cubic Hermite with exact values and slopes at inserted knots reproduces
+/// each component's own interpolant exactly, so merging costs no accuracy and
+/// saves five of six searches per evaluation).
+struct AxisErrorTable {
+  std::vector<double> position;  ///< knots, mm or rad, strictly increasing
+  /// value[i][c], slope[i][c]: component c at knot i (mm or rad; per mm/rad).
+  std::vector<std::array<double, kComponentCount>> value;
+  std::vector<std::array<double, kComponentCount>> slope;
+  bool periodic = false;  ///< rotary table spanning exactly 2*pi
+  std::string source;     ///< "file:line" of the (first) block, for messages
+  /// The axis the table belongs to: names it in messages and says whether
+  /// positions print as mm or degrees. (Added by the reader; default X.)
+  AxisName axis = AxisName::X;
+
+  bool empty() const { return position.empty(); }
+  double min_position() const { return position.front(); }
+  double max_position() const { return position.back(); }
+};
+
+/// All component errors of one axis: one table per approach direction.
+struct AxisErrors {
+  AxisName axis = AxisName::X;
+  AxisErrorTable plus;   ///< dir = +1 (or the only table)
+  AxisErrorTable minus;  ///< dir = -1; empty when not bidirectional
+  std::array<bool, kComponentCount> present{};  ///< given in the file
+  bool bidirectional() const { return !minus.empty(); }
+};
+
+/// The contents of one errors CSV.
+struct ErrorSet {
+  std::string file;                                ///< as named on input
+  std::map<std::string, std::string> metadata;     ///< "# key: value" lines
+  std::array<std::optional<AxisErrors>, kAxisNameCount> axis;  ///< by AxisName
+  /// Location errors by canonical name ("EC0X"), mm or rad.
+  std::map<std::string, double> location;
+
+  const AxisErrors* errors_of(AxisName a) const {
+    const auto& e = axis[static_cast<int>(a)];
+    return e ? &*e : nullptr;
+  }
+  double location_error(const std::string& canonical_name) const {
+    auto it = location.find(canonical_name);
+    return it == location.end() ? 0.0 : it->second;
+  }
+};
+
+/// Evaluates a table at position q (mm or rad): the six component errors
+/// (mm, rad). Throws std::out_of_range with a user message when q is outside
+/// and policy is kError; with kClamp holds the end value and increments
+/// *clamped (when given).
+void evaluate_table(const AxisErrorTable& table, double q, OutsidePolicy policy,
+                    std::array<double, kComponentCount>& out,
+                    std::uint64_t* clamped = nullptr);
+
+/// Evaluates an axis's errors for approach direction dir (+1, -1, 0).
+void evaluate_axis(const AxisErrors& errors, double q, int dir,
+                   OutsidePolicy policy, std::array<double, kComponentCount>& out,
+                   std::uint64_t* clamped = nullptr);
+
+/// PCHIP slopes (Fritsch–Carlson) for values y at strictly increasing knots x.
+std::vector<double> pchip_slopes(const std::vector<double>& x,
+                                 const std::vector<double>& y);
+
+/// PCHIP slopes for a periodic table (y.front() == y.back(), the span
+/// x.back() - x.front() is one period): every knot, the two ends included,
+/// takes the interior Fritsch–Carlson slope with its neighbours across the
+/// wrap, so the interpolant is C1 through the wrap as well. Both ends get the
+/// same slope. Fewer than three knots: all slopes zero (a closed table of two
+/// knots is constant).
+std::vector<double> pchip_slopes_periodic(const std::vector<double>& x,
+                                          const std::vector<double>& y);
+
+}  // namespace volmap

@@ -1,0 +1,106 @@
+// The volmap executable as scripts call it: exit status, one-line errors,
+// JSON output of `sensitivity` (spec: shared/spec/cli.md).
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/test_paths.h"
+
+namespace {
+
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+Result run(const std::string& args) {
+  // One file per call and process: ctest runs test cases in parallel.
+  static int calls = 0;
+  const std::string err_file = ::testing::TempDir() + "volmap_cli_err_" +
+                               std::to_string(getpid()) + "_" + std::to_string(++calls) + ".txt";
+  const std::string cmd = volmap::test::volmap_binary() + " " + args + " 2>" + err_file;
+  Result r{};
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int st = pclose(p);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  if (FILE* f = fopen(err_file.c_str(), "r")) {
+    while ((n = fread(buf.data(), 1, buf.size(), f)) > 0) r.err.append(buf.data(), n);
+    fclose(f);
+  }
+  std::remove(err_file.c_str());
+  return r;
+}
+
+std::string sample(const std::string& rel) { return volmap::test::source_path("samples/" + rel); }
+
+TEST(Cli, SensitivityJsonHasTheContractKeys) {
+  const Result r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") +
+                       " --at 250,200,150 --model dependent --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["model"], "dependent");
+  EXPECT_EQ(doc["at"]["X"], 250.0);
+  EXPECT_EQ(doc["gains"].size(), 21u);
+  for (const char* k : {"dx", "dy", "dz", "di", "dj", "dk"}) EXPECT_TRUE(doc["gains"]["EC0X"].contains(k));
+  // Table I, COX: dy = Xz + Xm = 0 + 250 for the sample (Xz = 0).
+  EXPECT_NEAR(doc["gains"]["EC0X"]["dy"].get<double>(), 250.0, 1e-9);
+  EXPECT_NEAR(doc["gains"]["EC0X"]["dx"].get<double>(), 180.0, 1e-9);  // -Yz, Yz = -180
+}
+
+TEST(Cli, SensitivityFiveAxisDefaultsToIndependent) {
+  const Result r = run("sensitivity --machine " + sample("machines/lei-hsu-xyzac.json") +
+                       " --at 10,20,30,-45,30 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["model"], "independent");
+  EXPECT_NEAR(doc["at"]["A"].get<double>(), -45.0, 1e-12);
+  EXPECT_TRUE(doc["gains"].contains("EX0C"));
+  EXPECT_TRUE(doc["gains"].contains("EY0A"));
+  EXPECT_TRUE(doc["gains"].contains("ECC"));
+}
+
+TEST(Cli, HumanTableOnStdout) {
+  const Result r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 0,0,0");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("EB0Z"), std::string::npos);
+  EXPECT_NE(r.out.find("Table II"), std::string::npos);
+}
+
+TEST(Cli, UsageErrorsExitTwo) {
+  EXPECT_EQ(run("").status, 2);
+  EXPECT_EQ(run("sensitivity --at 1,2,3").status, 2);
+  EXPECT_EQ(run("frobnicate").status, 2);
+  EXPECT_EQ(run("sensitivity --machine x --at 1,2,3 --model sideways").status, 2);
+}
+
+TEST(Cli, BadInputExitsOneWithOneLine) {
+  Result r = run("sensitivity --machine /nonexistent.json --at 1,2,3");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("/nonexistent.json"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+
+  r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 1,2");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("expected 3 values (X,Y,Z)"), std::string::npos) << r.err;
+
+  r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 900,0,0");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("outside the travel"), std::string::npos) << r.err;
+}
+
+TEST(Cli, HelpEndsWithAnExample) {
+  const Result r = run("sensitivity --help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("Example:"), std::string::npos);
+}
+
+}  // namespace
