@@ -112,7 +112,11 @@ class ErrorModel {
     ChainSide side = ChainSide::kWorkpiece;
     const AxisErrors* components = nullptr;  ///< null: no component errors
     SmallTransform location;                 ///< effective, see .cc
-    Eigen::Isometry3d T_parent_loc;          ///< Trans(offset) * L, exact
+    /// Trans(offset) * L, exact: p_parent = R_parent_loc p + t_parent_loc_mm.
+    Eigen::Matrix3d R_parent_loc = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t_parent_loc_mm = Eigen::Vector3d::Zero();
+    bool has_location_rotation = false;
+    int coordinate_axis = -1;  ///< rotary line along +x, +y, +z: 0, 1, 2
     /// Independent formulation: tool tip in this joint's location frame at
     /// the measurement pose with the joint at 0 (nominal). Zero otherwise.
     Eigen::Vector3d r_meas_mm = Eigen::Vector3d::Zero();
@@ -120,9 +124,8 @@ class ErrorModel {
   };
 
   SmallTransform component_errors(const BoundJoint& bj, double q, int dir) const;
-  Eigen::Isometry3d chain_actual(const std::vector<BoundJoint>& chain,
-                                 const AxisVector& u,
-                                 const ApproachDirections& dir) const;
+  void evaluate(const AxisVector& u, const ApproachDirections& dir,
+                ToolPose& actual_pose, ToolPose& nominal_pose) const;
 
   Machine machine_;
   ErrorSet errors_;

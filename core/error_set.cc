@@ -168,8 +168,18 @@ void evaluate_table(const AxisErrorTable& table, double q, OutsidePolicy policy,
   }
 
   // Interval i with x[i] <= q <= x[i+1], i in [0, n-2].
-  const auto after = std::upper_bound(x.begin() + 1, x.end() - 1, q);
-  const std::size_t i = static_cast<std::size_t>(after - x.begin()) - 1;
+  std::size_t i;
+  if (table.uniform_inv_step > 0.0) {
+    // q >= x_first here, so truncation is floor (and needs no SSE4.1 roundsd).
+    i = static_cast<std::size_t>((q - x_first) * table.uniform_inv_step);
+    if (i > n - 2) i = n - 2;
+    // Rounding at a knot may pick the neighbour interval: both are exact there.
+    if (q < x[i] && i > 0) --i;
+    if (q > x[i + 1] && i + 2 < n) ++i;
+  } else {
+    const auto after = std::upper_bound(x.begin() + 1, x.end() - 1, q);
+    i = static_cast<std::size_t>(after - x.begin()) - 1;
+  }
   const double h = x[i + 1] - x[i];
   const double s = (q - x[i]) / h;
   const double one_minus_s = 1.0 - s;
@@ -183,6 +193,25 @@ void evaluate_table(const AxisErrorTable& table, double q, OutsidePolicy policy,
   const std::array<double, kComponentCount>& m1 = table.slope[i + 1];
   for (int c = 0; c < kComponentCount; ++c)
     out[c] = h00 * y0[c] + h10 * m0[c] + h01 * y1[c] + h11 * m1[c];
+}
+
+void prepare_lookup(AxisErrorTable& table) {
+  table.uniform_inv_step = 0.0;
+  const std::vector<double>& x = table.position;
+  if (x.size() < 3) return;
+  const double step = (x.back() - x.front()) / static_cast<double>(x.size() - 1);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (std::abs(x[i] - (x.front() + step * static_cast<double>(i))) > 1e-12 * std::abs(step) * static_cast<double>(x.size()))
+      return;
+  table.uniform_inv_step = 1.0 / step;
+}
+
+void prepare_lookup(ErrorSet& errors) {
+  for (auto& a : errors.axis) {
+    if (!a) continue;
+    if (!a->plus.empty()) prepare_lookup(a->plus);
+    if (!a->minus.empty()) prepare_lookup(a->minus);
+  }
 }
 
 void evaluate_axis(const AxisErrors& errors, double q, int dir,

@@ -49,6 +49,10 @@ struct AxisErrorTable {
   /// The axis the table belongs to: names it in messages and says whether
   /// positions print as mm or degrees. (Added by the reader; default X.)
   AxisName axis = AxisName::X;
+  /// Lookup accelerator set by prepare_lookup(): 1/step when the knots are
+  /// equally spaced (to 1e-12 relative), so the interval is found by one
+  /// multiplication; 0 means binary search. Derived, never read from a file.
+  double uniform_inv_step = 0.0;
 
   bool empty() const { return position.empty(); }
   double min_position() const { return position.front(); }
@@ -95,9 +99,19 @@ void evaluate_axis(const AxisErrors& errors, double q, int dir,
                    OutsidePolicy policy, std::array<double, kComponentCount>& out,
                    std::uint64_t* clamped = nullptr);
 
+/// Sets the derived lookup fields of a table (uniform_inv_step). Call after
+/// filling position; evaluation is correct without it, only slower.
+void prepare_lookup(AxisErrorTable& table);
+void prepare_lookup(ErrorSet& errors);
+
 /// PCHIP slopes (Fritsch–Carlson) for values y at strictly increasing knots x.
 std::vector<double> pchip_slopes(const std::vector<double>& x,
                                  const std::vector<double>& y);
+
+/// Sets the derived lookup fields of a table (uniform_inv_step). Call after
+/// filling position; evaluation is correct without it, only slower.
+void prepare_lookup(AxisErrorTable& table);
+void prepare_lookup(ErrorSet& errors);
 
 /// PCHIP slopes for a periodic table (y.front() == y.back(), the span
 /// x.back() - x.front() is one period): every knot, the two ends included,

@@ -646,7 +646,9 @@ class Reader {
 }  // namespace
 
 ErrorSet read_errors_csv(std::istream& in, const std::string& file) {
-  return Reader(file).read(in);
+  ErrorSet set = Reader(file).read(in);
+  prepare_lookup(set);
+  return set;
 }
 
 ErrorSet load_errors_csv(const std::string& path) {

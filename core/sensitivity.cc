@@ -57,4 +57,25 @@ std::vector<ErrorGain> error_gains(const Machine& m, Formulation f,
   return gains;
 }
 
+std::vector<double> error_values(const Machine& m, const ErrorSet& errors,
+                                 const AxisVector& u, OutsidePolicy outside) {
+  std::vector<double> values;
+  for (const std::string& name : model_error_names(m)) {
+    const ErrorName n = *parse_error_name(name);
+    if (n.location) {
+      values.push_back(errors.location_error(name));
+      continue;
+    }
+    const AxisErrors* ax = errors.errors_of(n.axis);
+    if (!ax) {
+      values.push_back(0.0);
+      continue;
+    }
+    std::array<double, kComponentCount> v;
+    evaluate_axis(*ax, u[*m.index_of(n.axis)], 0, outside, v);
+    values.push_back(v[static_cast<size_t>(n.component)]);
+  }
+  return values;
+}
+
 }  // namespace volmap

@@ -30,4 +30,10 @@ std::vector<std::string> model_error_names(const Machine& m);
 std::vector<ErrorGain> error_gains(const Machine& m, Formulation f,
                                    const AxisVector& u);
 
+/// The value of every error of model_error_names(m) at u, from an error set
+/// (mm or rad; zero where the set has none). Component errors of an axis with
+/// bidirectional tables take the mean of both directions.
+std::vector<double> error_values(const Machine& m, const ErrorSet& errors,
+                                 const AxisVector& u, OutsidePolicy outside);
+
 }  // namespace volmap

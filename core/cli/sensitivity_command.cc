@@ -2,6 +2,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -9,6 +10,7 @@
 
 #include "core/cli/commands.h"
 #include "core/cli/parse_util.h"
+#include "core/errors_csv.h"
 #include "core/machine_json.h"
 #include "core/sensitivity.h"
 
@@ -16,7 +18,7 @@ namespace volmap::cli {
 
 Runner register_sensitivity(CLI::App& app) {
   struct Opts {
-    std::string machine, at, model = "independent";
+    std::string machine, errors, at, model = "independent";
     bool json = false;
   };
   auto o = std::make_shared<Opts>();
@@ -32,6 +34,9 @@ Runner register_sensitivity(CLI::App& app) {
   sub->add_option("--model", o->model,
                   "independent (Table II, default) or dependent (Table I)")
       ->check(CLI::IsMember({"independent", "dependent"}));
+  sub->add_option("--errors", o->errors,
+                  "Errors CSV (errors.md): adds each error's value and its contribution "
+                  "to the tool-tip error at --at, and the total (first order and exact)");
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
   sub->footer(
       "Example:\n  volmap sensitivity --machine samples/machines/hsu-3axis.json "
@@ -44,6 +49,18 @@ Runner register_sensitivity(CLI::App& app) {
                                                   : Formulation::kIndependent;
     const std::vector<ErrorGain> gains = error_gains(m, f, u);
     auto clean = [](double x) { return std::abs(x) < 1e-12 ? 0.0 : x; };
+    // With --errors: value of each error at u and its contribution (um).
+    std::optional<ErrorModel> model;
+    std::vector<double> values;
+    if (!o->errors.empty()) {
+      model.emplace(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
+      values = error_values(m, model->errors(), u, OutsidePolicy::kError);
+    }
+    auto display_value = [](const ErrorGain& g, double v) { return v * (g.angular ? 1e6 : 1e3); };
+    auto contribution_um = [&](size_t k) -> Eigen::Vector3d { return gains[k].dP * values[k] * 1e3; };
+    auto um3 = [&](const Eigen::Vector3d& v) {
+      return nlohmann::ordered_json::array({clean(v.x()), clean(v.y()), clean(v.z())});
+    };
     if (o->json) {
       nlohmann::ordered_json doc;
       doc["model"] = o->model;
@@ -60,6 +77,20 @@ Runner register_sensitivity(CLI::App& app) {
                      {"dj", clean(e.dQ.y())}, {"dk", clean(e.dQ.z())}};
       }
       doc["gains"] = g;
+      if (model) {
+        nlohmann::ordered_json c = nlohmann::ordered_json::object();
+        for (size_t k = 0; k < gains.size(); ++k) {
+          const Eigen::Vector3d d = contribution_um(k);
+          c[gains[k].name] = {{"value", clean(display_value(gains[k], values[k]))},
+                              {"dx_um", clean(d.x())}, {"dy_um", clean(d.y())}, {"dz_um", clean(d.z())}};
+        }
+        const PoseError fo = model->first_order(u), ex = model->exact(u);
+        doc["errors"] = {{"file", o->errors},
+                         {"contributions", c},
+                         {"first_order_um", um3(fo.dP_mm * 1e3)},
+                         {"exact_um", um3(ex.dP_mm * 1e3)},
+                         {"exact_axis_urad", um3(ex.dQ * 1e6)}};
+      }
       std::cout << doc.dump(2) << "\n";
       return 0;
     }
@@ -69,12 +100,36 @@ Runner register_sensitivity(CLI::App& app) {
                              o->at);
     std::cout << "Position gains in mm per mm (translational errors) or mm per rad "
                  "(angular);\norientation gains in rad per rad. Workpiece coordinates.\n\n";
-    std::cout << fmt::format("{:<6} {:>12} {:>12} {:>12} {:>8} {:>8} {:>8}\n",
-                             "error", "dx", "dy", "dz", "di", "dj", "dk");
-    for (const ErrorGain& e : gains) {
-      std::cout << fmt::format("{:<6} {:>12.4f} {:>12.4f} {:>12.4f} {:>8.4f} {:>8.4f} {:>8.4f}\n",
+    std::cout << fmt::format("{:<6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>7}", "error", "dx",
+                             "dy", "dz", "di", "dj", "dk");
+    if (model)
+      std::cout << fmt::format(" | {:>9} {:>8} {:>8} {:>8}", "value", "dx um", "dy um", "dz um");
+    std::cout << "\n";
+    for (size_t k = 0; k < gains.size(); ++k) {
+      const ErrorGain& e = gains[k];
+      std::cout << fmt::format("{:<6} {:>10.3f} {:>10.3f} {:>10.3f} {:>7.3f} {:>7.3f} {:>7.3f}",
                                e.name, clean(e.dP.x()), clean(e.dP.y()), clean(e.dP.z()),
                                clean(e.dQ.x()), clean(e.dQ.y()), clean(e.dQ.z()));
+      if (model) {
+        const Eigen::Vector3d d = contribution_um(k);
+        std::cout << fmt::format(" | {:>6.2f} {:<2} {:>8.3f} {:>8.3f} {:>8.3f}",
+                                 clean(display_value(e, values[k])), e.angular ? "ur" : "um",
+                                 clean(d.x()), clean(d.y()), clean(d.z()));
+      }
+      std::cout << "\n";
+    }
+    if (model) {
+      const PoseError fo = model->first_order(u), ex = model->exact(u);
+      std::cout << fmt::format(
+          "\nTool-tip error at {} (workpiece coordinates, actual - nominal):\n"
+          "  first order  dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um\n"
+          "  exact HTM    dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um  |dP| {:.3f} um\n"
+          "  tool axis    di {:8.3f} ur  dj {:8.3f} ur  dk {:8.3f} ur\n"
+          "(value: um for translational errors, ur = urad for angular ones; mean of both\n"
+          " directions for bidirectional tables)\n",
+          o->at, clean(fo.dP_mm.x() * 1e3), clean(fo.dP_mm.y() * 1e3), clean(fo.dP_mm.z() * 1e3),
+          clean(ex.dP_mm.x() * 1e3), clean(ex.dP_mm.y() * 1e3), clean(ex.dP_mm.z() * 1e3),
+          ex.dP_mm.norm() * 1e3, clean(ex.dQ.x() * 1e6), clean(ex.dQ.y() * 1e6), clean(ex.dQ.z() * 1e6));
     }
     return 0;
   };
