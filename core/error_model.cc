@@ -79,7 +79,7 @@ namespace {
 class AxisTurn {
  public:
   AxisTurn(int coordinate_axis, const Eigen::Vector3d& d, double angle_rad)
-      : axis_(coordinate_axis) {
+      : axis_(coordinate_axis), i_((coordinate_axis + 1) % 3), k_((coordinate_axis + 2) % 3) {
     ::sincos(angle_rad, &s_, &c_);  // one libm call for both
     if (axis_ < 0) R_ = axis_rotation(d, angle_rad);
   }
@@ -88,15 +88,14 @@ class AxisTurn {
       v = R_ * v;
       return;
     }
-    const int i = (axis_ + 1) % 3, k = (axis_ + 2) % 3;
-    const double vi = v[i], vk = v[k];
-    v[i] = c_ * vi - s_ * vk;
-    v[k] = s_ * vi + c_ * vk;
+    const double vi = v[i_], vk = v[k_];
+    v[i_] = c_ * vi - s_ * vk;
+    v[k_] = s_ * vi + c_ * vk;
   }
 
  private:
-  int axis_;
-  double c_, s_;
+  int axis_, i_, k_;  // the turn mixes coordinates i_ and k_
+  double c_ = 1, s_ = 0;
   Eigen::Matrix3d R_;
 };
 
@@ -213,30 +212,51 @@ SmallTransform ErrorModel::component_errors(const BoundJoint& bj, double q,
 // is carried along in the same pass, sharing the rotary axes' sin and cos.
 void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir,
                           ToolPose& actual_pose, ToolPose& nominal_pose) const {
+  // Phase 1: every joint's error transform, independent of the others (the
+  // table lookups overlap in the pipeline instead of waiting on the chain).
+  constexpr int kMaxJoints = 6;
+  std::array<Eigen::Matrix3d, kMaxJoints> R_e;
+  std::array<Eigen::Vector3d, kMaxJoints> delta_e;
+  const int n_work = static_cast<int>(workpiece_.size());
+  const int n_tool = static_cast<int>(tool_.size());
+  for (int k = 0; k < n_work + n_tool; ++k) {
+    const BoundJoint& bj = k < n_work ? workpiece_[static_cast<size_t>(k)]
+                                      : tool_[static_cast<size_t>(k - n_work)];
+    const Joint& j = *bj.joint;
+    const double q = u[j.index];
+    const SmallTransform e = component_errors(bj, q, dir[static_cast<size_t>(j.index)]);
+    small_rotation_into(e.eps_rad, R_e[static_cast<size_t>(k)]);
+    delta_e[static_cast<size_t>(k)] = e.delta_mm;
+    if (bj.independent) {
+      const Eigen::Vector3d r = bj.side == ChainSide::kWorkpiece
+                                    ? Eigen::Vector3d(bj.r_meas_mm - q * j.direction_parent)
+                                    : bj.r_meas_mm;
+      delta_e[static_cast<size_t>(k)] -= R_e[static_cast<size_t>(k)] * r - r;
+    }
+  }
+
+  // Phase 2: tool chain, spindle to base: p <- T_parent_j p.
   Eigen::Vector3d p_a = machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis;
   Eigen::Vector3d q_a = machine_.tool_axis;
   Eigen::Vector3d p_n = p_a, q_n = q_a;
-  // Tool chain, spindle to base.
-  for (auto it = tool_.rbegin(); it != tool_.rend(); ++it) {
-    const BoundJoint& bj = *it;
+  for (int k = n_tool - 1; k >= 0; --k) {
+    const BoundJoint& bj = tool_[static_cast<size_t>(k)];
     const Joint& j = *bj.joint;
     const double q = u[j.index];
-    SmallTransform e = component_errors(bj, q, dir[static_cast<size_t>(j.index)]);
-    Eigen::Matrix3d R_e;
-    small_rotation_into(e.eps_rad, R_e);
-    if (bj.independent) e.delta_mm -= (R_e - Eigen::Matrix3d::Identity()) * bj.r_meas_mm;
+    const Eigen::Matrix3d& R = R_e[static_cast<size_t>(n_work + k)];
+    const Eigen::Vector3d& delta = delta_e[static_cast<size_t>(n_work + k)];
     if (j.rotary) {
       const AxisTurn turn(bj.coordinate_axis, j.direction_parent, q);
       turn.apply(p_n);
       turn.apply(q_n);
       turn.apply(p_a);
       turn.apply(q_a);
-      p_a = R_e * p_a + e.delta_mm;  // E(q) Rot(d, q)
-      q_a = R_e * q_a;
+      p_a = R * p_a + delta;  // E(q) Rot(d, q)
+      q_a = R * q_a;
     } else {
       p_n += q * j.direction_parent;
-      p_a = R_e * p_a + e.delta_mm + q * j.direction_parent;  // Trans(q d) E(q)
-      q_a = R_e * q_a;
+      p_a = R * p_a + delta + q * j.direction_parent;  // Trans(q d) E(q)
+      q_a = R * q_a;
     }
     p_n += j.offset_parent_mm;
     if (bj.has_location_rotation) {
@@ -245,33 +265,31 @@ void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir,
     }
     p_a += bj.t_parent_loc_mm;
   }
-  // Workpiece chain, base to workpiece: p <- T_parent_j^-1 p.
-  for (const BoundJoint& bj : workpiece_) {
+  // Phase 3: workpiece chain, base to workpiece: p <- T_parent_j^-1 p.
+  for (int k = 0; k < n_work; ++k) {
+    const BoundJoint& bj = workpiece_[static_cast<size_t>(k)];
     const Joint& j = *bj.joint;
     const double q = u[j.index];
-    SmallTransform e = component_errors(bj, q, dir[static_cast<size_t>(j.index)]);
-    Eigen::Matrix3d R_e;
-    small_rotation_into(e.eps_rad, R_e);
-    if (bj.independent)
-      e.delta_mm -= (R_e - Eigen::Matrix3d::Identity()) * (bj.r_meas_mm - q * j.direction_parent);
+    const Eigen::Matrix3d& R = R_e[static_cast<size_t>(k)];
+    const Eigen::Vector3d& delta = delta_e[static_cast<size_t>(k)];
     p_n -= j.offset_parent_mm;
     p_a -= bj.t_parent_loc_mm;
     if (bj.has_location_rotation) {
-      p_a = bj.R_parent_loc.transpose() * p_a;
-      q_a = bj.R_parent_loc.transpose() * q_a;
+      p_a = bj.R_parent_loc.transpose() * (p_a);
+      q_a = bj.R_parent_loc.transpose() * (q_a);
     }
     if (j.rotary) {
       const AxisTurn turn(bj.coordinate_axis, j.direction_parent, -q);
-      p_a = R_e.transpose() * (p_a - e.delta_mm);
-      q_a = R_e.transpose() * q_a;
+      p_a = R.transpose() * (p_a - delta);
+      q_a = R.transpose() * (q_a);
       turn.apply(p_n);
       turn.apply(q_n);
       turn.apply(p_a);
       turn.apply(q_a);
     } else {
       p_n -= q * j.direction_parent;
-      p_a = R_e.transpose() * (p_a - e.delta_mm - q * j.direction_parent);
-      q_a = R_e.transpose() * q_a;
+      p_a = R.transpose() * (p_a - delta - q * j.direction_parent);
+      q_a = R.transpose() * (q_a);
     }
   }
   actual_pose.tip_mm = p_a - machine_.workpiece_origin_mm;

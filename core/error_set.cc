@@ -72,8 +72,10 @@ std::string format_position(const AxisErrorTable& table, double q) {
   return format_number(q) + " mm";
 }
 
-[[noreturn, gnu::cold, gnu::noinline]] void throw_outside(
-    const AxisErrorTable& table, double q) {
+}  // namespace
+
+namespace detail {
+void throw_outside(const AxisErrorTable& table, double q) {
   std::string message = table.source.empty() ? std::string("error table")
                                              : table.source;
   message += ": ";
@@ -91,8 +93,7 @@ std::string format_position(const AxisErrorTable& table, double q) {
              "evaluate with the clamp policy";
   throw std::out_of_range(message);
 }
-
-}  // namespace
+}  // namespace detail
 
 std::vector<double> pchip_slopes(const std::vector<double>& x,
                                  const std::vector<double>& y) {
@@ -136,65 +137,6 @@ std::vector<double> pchip_slopes_periodic(const std::vector<double>& x,
   return m;
 }
 
-void evaluate_table(const AxisErrorTable& table, double q, OutsidePolicy policy,
-                    std::array<double, kComponentCount>& out,
-                    std::uint64_t* clamped) {
-  assert(!table.empty());
-  assert(table.value.size() == table.position.size());
-  assert(table.slope.size() == table.position.size());
-  const std::vector<double>& x = table.position;
-  const std::size_t n = x.size();
-  const double x_first = x.front();
-  const double x_last = x.back();
-
-  if (!(q >= x_first && q <= x_last)) {  // outside, or NaN
-    if (table.periodic && std::isfinite(q)) {
-      // Wrap into [x_first, x_first + 2 pi); rounding may leave q a hair
-      // outside the knots, where the closed table has its end value anyway.
-      q = x_first + std::fmod(q - x_first, kTwoPi);
-      if (q < x_first) q += kTwoPi;
-      q = std::clamp(q, x_first, x_last);
-    } else {
-      if (policy == OutsidePolicy::kError || std::isnan(q))
-        throw_outside(table, q);
-      if (clamped != nullptr) ++*clamped;
-      out = table.value[q < x_first ? 0 : n - 1];
-      return;
-    }
-  }
-  if (n == 1) {
-    out = table.value[0];
-    return;
-  }
-
-  // Interval i with x[i] <= q <= x[i+1], i in [0, n-2].
-  std::size_t i;
-  if (table.uniform_inv_step > 0.0) {
-    // q >= x_first here, so truncation is floor (and needs no SSE4.1 roundsd).
-    i = static_cast<std::size_t>((q - x_first) * table.uniform_inv_step);
-    if (i > n - 2) i = n - 2;
-    // Rounding at a knot may pick the neighbour interval: both are exact there.
-    if (q < x[i] && i > 0) --i;
-    if (q > x[i + 1] && i + 2 < n) ++i;
-  } else {
-    const auto after = std::upper_bound(x.begin() + 1, x.end() - 1, q);
-    i = static_cast<std::size_t>(after - x.begin()) - 1;
-  }
-  const double h = x[i + 1] - x[i];
-  const double s = (q - x[i]) / h;
-  const double one_minus_s = 1.0 - s;
-  const double h00 = (1.0 + 2.0 * s) * one_minus_s * one_minus_s;
-  const double h10 = s * one_minus_s * one_minus_s * h;
-  const double h01 = s * s * (3.0 - 2.0 * s);
-  const double h11 = s * s * (s - 1.0) * h;
-  const std::array<double, kComponentCount>& y0 = table.value[i];
-  const std::array<double, kComponentCount>& y1 = table.value[i + 1];
-  const std::array<double, kComponentCount>& m0 = table.slope[i];
-  const std::array<double, kComponentCount>& m1 = table.slope[i + 1];
-  for (int c = 0; c < kComponentCount; ++c)
-    out[c] = h00 * y0[c] + h10 * m0[c] + h01 * y1[c] + h11 * m1[c];
-}
-
 void prepare_lookup(AxisErrorTable& table) {
   table.uniform_inv_step = 0.0;
   const std::vector<double>& x = table.position;
@@ -212,28 +154,6 @@ void prepare_lookup(ErrorSet& errors) {
     if (!a->plus.empty()) prepare_lookup(a->plus);
     if (!a->minus.empty()) prepare_lookup(a->minus);
   }
-}
-
-void evaluate_axis(const AxisErrors& errors, double q, int dir,
-                   OutsidePolicy policy, std::array<double, kComponentCount>& out,
-                   std::uint64_t* clamped) {
-  if (!errors.bidirectional() || dir > 0) {
-    evaluate_table(errors.plus, q, policy, out, clamped);
-    return;
-  }
-  if (dir < 0) {
-    evaluate_table(errors.minus, q, policy, out, clamped);
-    return;
-  }
-  // Direction unknown: the mean of both directions. One clamped evaluation
-  // of the axis counts once, even when both tables clamp.
-  std::uint64_t clamped_here = 0;
-  std::array<double, kComponentCount> minus_out;
-  evaluate_table(errors.plus, q, policy, out, &clamped_here);
-  evaluate_table(errors.minus, q, policy, minus_out, &clamped_here);
-  for (int c = 0; c < kComponentCount; ++c)
-    out[c] = 0.5 * (out[c] + minus_out[c]);
-  if (clamped != nullptr && clamped_here > 0) ++*clamped;
 }
 
 }  // namespace volmap
