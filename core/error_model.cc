@@ -1,5 +1,7 @@
 #include "core/error_model.h"
 
+#include "core/trig.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -80,7 +82,7 @@ class AxisTurn {
  public:
   AxisTurn(int coordinate_axis, const Eigen::Vector3d& d, double angle_rad)
       : axis_(coordinate_axis), i_((coordinate_axis + 1) % 3), k_((coordinate_axis + 2) % 3) {
-    ::sincos(angle_rad, &s_, &c_);  // one libm call for both
+    sincos_axis(angle_rad, s_, c_);
     if (axis_ < 0) R_ = axis_rotation(d, angle_rad);
   }
   void apply(Eigen::Vector3d& v) const {

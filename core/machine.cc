@@ -1,5 +1,7 @@
 #include "core/machine.h"
 
+#include "core/trig.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -37,7 +39,8 @@ std::string Machine::structure_code() const {
 
 Eigen::Matrix3d axis_rotation(const Eigen::Vector3d& d, double angle_rad) {
   // Exact for the unit axes the machine files use; Rodrigues otherwise.
-  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
+  double s, c;
+  sincos_axis(angle_rad, s, c);
   Eigen::Matrix3d K;
   K << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
   return Eigen::Matrix3d::Identity() * c + s * K + (1 - c) * d * d.transpose();
