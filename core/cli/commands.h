@@ -1,5 +1,6 @@
-// Subcommands of the volmap executable. Each register_* adds its subcommand
-// to the app and returns the function that runs it after parsing.
+// Subcommands of the volmap executable. Each subcommand lives in its own
+// file under core/cli/ and registers itself with a static
+// CommandRegistration; main() adds them in `order` (the order of --help).
 #pragma once
 
 #include <functional>
@@ -8,8 +9,13 @@
 
 namespace volmap::cli {
 
+/// Runs a parsed subcommand; returns the exit status.
 using Runner = std::function<int()>;
+/// Adds the subcommand to the app and returns its runner.
+using Registrar = std::function<Runner(CLI::App&)>;
 
-Runner register_sensitivity(CLI::App& app);
+struct CommandRegistration {
+  CommandRegistration(int order, Registrar registrar);
+};
 
 }  // namespace volmap::cli

@@ -1,7 +1,10 @@
 // volmap: geometric error models, compensation tables and NC post-processing
 // for machine tools. Exit status: 0 success, 2 usage error, 1 anything else
 // (one line on stderr naming the file and line and what is wrong).
+#include <algorithm>
 #include <cstdio>
+#include <utility>
+#include <vector>
 #include <exception>
 #include <iostream>
 #include <map>
@@ -11,6 +14,18 @@
 
 #include "core/cli/commands.h"
 
+namespace volmap::cli {
+namespace {
+std::vector<std::pair<int, Registrar>>& registry() {
+  static std::vector<std::pair<int, Registrar>> r;
+  return r;
+}
+}  // namespace
+CommandRegistration::CommandRegistration(int order, Registrar registrar) {
+  registry().emplace_back(order, std::move(registrar));
+}
+}  // namespace volmap::cli
+
 int main(int argc, char** argv) {
   CLI::App app{
       "volmap: machine-tool geometric error models, compensation tables and "
@@ -18,10 +33,13 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("volmap 0.1.0"));
   std::map<const CLI::App*, volmap::cli::Runner> runners;
-  auto add = [&](volmap::cli::Runner r) {
+  auto commands = volmap::cli::registry();
+  std::stable_sort(commands.begin(), commands.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (auto& [order, registrar] : commands) {
+    volmap::cli::Runner r = registrar(app);
     runners[app.get_subcommands({}).back()] = std::move(r);
-  };
-  add(volmap::cli::register_sensitivity(app));
+  }
 
   try {
     app.parse(argc, argv);

@@ -16,6 +16,7 @@
 
 namespace volmap::cli {
 
+namespace {
 Runner register_sensitivity(CLI::App& app) {
   struct Opts {
     std::string machine, errors, at, model = "independent";
@@ -134,5 +135,9 @@ Runner register_sensitivity(CLI::App& app) {
     return 0;
   };
 }
+
+}  // namespace
+
+static const CommandRegistration kSensitivity(10, register_sensitivity);
 
 }  // namespace volmap::cli
