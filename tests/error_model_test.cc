@@ -11,6 +11,7 @@
 
 #include "core/error_model.h"
 #include "core/errors_csv.h"
+#include "core/kinematics.h"
 #include "core/machine_json.h"
 #include "core/sensitivity.h"
 #include "tests/support/test_paths.h"
@@ -314,5 +315,22 @@ TEST(ErrorModel, SampleErrorsLoadAndGiveRealisticMagnitudes) {
   }
 }
 
+}  // namespace
+}  // namespace volmap
+
+namespace volmap {
+namespace {
+TEST(Kinematics, LinearAxesForTipReachTheTip) {
+  const Machine m = load_machine_json(test::source_path("samples/machines/lei-hsu-xyzac.json"));
+  std::mt19937 rng(9);
+  for (int t = 0; t < 100; ++t) {
+    const AxisVector u = random_pose(m, rng);
+    const Eigen::Vector3d tip = nominal_forward(m, u).tip_mm;
+    AxisVector guess = u;
+    guess[0] = guess[1] = guess[2] = 0.0;
+    const AxisVector got = linear_axes_for_tip(m, guess, tip);
+    EXPECT_NEAR((got - u).norm(), 0.0, 1e-9);
+  }
+}
 }  // namespace
 }  // namespace volmap
