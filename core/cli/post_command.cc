@@ -1,0 +1,93 @@
+// volmap post: an NC program rewritten for the real machine (three-axis).
+#include <fstream>
+#include <unistd.h>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "core/atomic_file.h"
+#include "core/cli/commands.h"
+#include "core/cli/parse_util.h"
+#include "core/errors_csv.h"
+#include "core/input_error.h"
+#include "core/machine_json.h"
+#include "postproc/post_program.h"
+
+namespace volmap::cli {
+namespace {
+
+Runner register_post(CLI::App& app) {
+  struct Opts {
+    std::string machine, errors, table, work_offset, var_file, tool_table, in, out;
+    double tolerance_um = 1.0;
+    int decimals = -1;
+    bool clamp = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* sub = app.add_subcommand("post", "Rewrite an NC program for the real machine (correction of every point, segmented within tolerance)");
+  sub->add_option("--machine", o->machine, "Machine definition (JSON)")->required();
+  auto* errors = sub->add_option("--errors", o->errors, "Errors CSV (errors.md)");
+  auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map); not yet supported by post");
+  errors->excludes(table);
+  sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)");
+  sub->add_option("--decimals", o->decimals, "Decimals of rewritten numbers (default 4 in mm, 5 in inch)")->check(CLI::Range(0, 9));
+  sub->add_option("--work-offset", o->work_offset, "Machine position X,Y,Z (mm) of the program origin for G54");
+  sub->add_option("--var-file", o->var_file, "LinuxCNC parameter file with the G54-G59.3 offsets");
+  sub->add_option("--tool-table", o->tool_table, "LinuxCNC tool table (.tbl) for G43 H");
+  sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
+  sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
+  sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
+  sub->footer("Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
+              "      --work-offset 100,100,50 part.ngc -o part-compensated.ngc");
+  return [o]() -> int {
+    if (o->errors.empty())
+      throw std::invalid_argument("post needs --errors (table input is not supported yet)");
+    const Machine m = load_machine_json(o->machine);
+    const ErrorSet e = load_errors_csv(o->errors);
+    nc::ProgramSetup setup;
+    if (!o->var_file.empty()) nc::read_var_file(o->var_file, setup);
+    if (!o->work_offset.empty()) {
+      Machine three = m;  // parse X,Y,Z as mm
+      const AxisVector wo = parse_axis_position(m, o->work_offset, "--work-offset");
+      for (int a = 0; a < 3; ++a) setup.work_offset_mm[0][a] = wo[a];
+    }
+    if (!o->tool_table.empty()) nc::read_tool_table(o->tool_table, setup);
+    post::PostOptions opt;
+    opt.tolerance_mm = o->tolerance_um * 1e-3;
+    opt.decimals = o->decimals;
+    opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+    std::ifstream file_in;
+    std::istream* in = &std::cin;
+    std::string in_name = "<stdin>";
+    if (o->in != "-") {
+      file_in.open(o->in, std::ios::binary);
+      if (!file_in) throw InputError(o->in, 0, "cannot open the program; check the path");
+      in = &file_in;
+      in_name = o->in;
+    }
+    std::vector<std::string> inputs{o->in, o->machine, o->errors};
+    if (!o->var_file.empty()) inputs.push_back(o->var_file);
+    if (!o->tool_table.empty()) inputs.push_back(o->tool_table);
+    if (o->out == "-") {
+      // Streams straight out (constant memory); a failure part-way leaves a
+      // partial standard output and a non-zero exit status.
+      post::post_program(*in, in_name, std::cout, m, e, setup, opt);
+      std::cout.flush();
+      return 0;
+    }
+    AtomicOutput out(o->out, inputs);
+    const post::PostReport r = post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
+    out.commit();
+    if (isatty(2))
+      std::cerr << fmt::format("{} lines, {} changed, {} added, max correction {:.2f} um\n", r.lines,
+                               r.lines_changed, r.lines_added, r.max_correction_mm * 1e3);
+    return 0;
+  };
+}
+
+}  // namespace
+
+static const CommandRegistration kPost(40, register_post);
+
+}  // namespace volmap::cli

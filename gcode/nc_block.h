@@ -1,0 +1,49 @@
+// One block (line) of an RS274NGC / ISO 6983 program, lexed.
+//
+// The whole text of the line is kept: a word records the byte span it came
+// from, so a writer can replace a word and keep everything else (comments,
+// spacing, N numbers, case) byte for byte. Lexing only: meaning is the
+// interpreter's (nc_interpreter.h).
+//
+// G and M numbers are compared as scaled integers, never as floats (grbl):
+// G38.2 -> 382, G1 -> 10, G59.3 -> 593.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace volmap::nc {
+
+struct Word {
+  char letter = 0;       ///< upper case
+  double value = 0.0;    ///< as written (program units)
+  int code10 = -1;       ///< G/M: value x 10 when it has at most one decimal, else -1
+  std::uint32_t begin = 0, end = 0;  ///< byte span [begin, end) in Block::text
+  int decimals = 0;      ///< digits after the decimal point as written
+};
+
+struct Block {
+  std::string text;          ///< the raw line, without its line ending
+  int line = 0;              ///< 1-based physical line number
+  bool block_delete = false; ///< starts with '/'
+  bool percent = false;      ///< a '%' program delimiter line
+  std::vector<Word> words;   ///< in order of appearance, N words included
+  std::string comment;       ///< text of the first ( ) comment (for MSG)
+
+  const Word* find(char letter) const {
+    for (const Word& w : words)
+      if (w.letter == letter) return &w;
+    return nullptr;
+  }
+  bool has(char letter) const { return find(letter) != nullptr; }
+};
+
+/// Lexes one line (without its line ending). Throws InputError
+/// ("file:line:column: ...; what to do") for what volmap does not read:
+/// O-word control flow, # parameters, [ ] expressions, a letter without a
+/// number, an unclosed comment, a character that is not G-code.
+Block lex_block(std::string_view text, int line, const std::string& file);
+
+}  // namespace volmap::nc

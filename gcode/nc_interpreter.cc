@@ -1,0 +1,397 @@
+#include "gcode/nc_interpreter.h"
+
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/input_error.h"
+
+namespace volmap::nc {
+namespace {
+
+// Modal groups of G codes (code x 10), RS274NGC / LinuxCNC numbering.
+enum GGroup { kNonModal = 0, kMotion = 1, kPlane = 2, kDistance = 3, kArcDistance = 4,
+              kFeedMode = 5, kUnits = 6, kCutterComp = 7, kToolLength = 8, kReturnMode = 10,
+              kCoordSystem = 12, kPathControl = 13, kSpindleMode = 14, kGroupCount = 16 };
+
+// Returns the group of a supported G code, or -1 with `why` set for one
+// volmap refuses.
+int g_group(int code10, const char** why) {
+  switch (code10) {
+    case 0: case 10: case 20: case 30: case 730: case 800: case 810: case 820: case 830:
+    case 850: case 860: case 890:
+      return kMotion;
+    case 170: case 180: case 190: return kPlane;
+    case 900: case 910: return kDistance;
+    case 901: case 911: return kArcDistance;
+    case 930: case 940: case 950: return kFeedMode;
+    case 200: case 210: return kUnits;
+    case 400: return kCutterComp;
+    case 430: case 431: case 490: return kToolLength;
+    case 980: case 990: return kReturnMode;
+    case 540: case 550: case 560: case 570: case 580: case 590: case 591: case 592: case 593:
+      return kCoordSystem;
+    case 610: case 611: case 640: return kPathControl;
+    case 960: case 970: return kSpindleMode;
+    case 40: case 530: return kNonModal;
+    case 410: case 420: case 411: case 421:
+      *why = "cutter radius compensation (G41/G42) is not supported: the post-processor "
+             "needs the tool centre path; output it from CAM with G40";
+      return -1;
+    case 280: case 281: case 300: case 301:
+      *why = "G28/G30 move to stored positions the program does not state; replace them "
+             "with explicit G53 moves";
+      return -1;
+    case 920: case 921: case 922: case 923: case 520:
+      *why = "G92/G52 coordinate offsets are not supported; use G54-G59.3 work offsets "
+             "(--work-offset or --var-file)";
+      return -1;
+    case 100:
+      *why = "G10 (setting offsets or tools from the program) is not supported; give them "
+             "with --var-file / --tool-table";
+      return -1;
+    case 382: case 383: case 384: case 385:
+      *why = "probing moves (G38.x) cannot be compensated; run them uncompensated";
+      return -1;
+    case 330: case 331: case 760: case 840: case 740: case 870: case 880:
+      *why = "threading and tapping cycles (G33, G76, G84, G74) and G87/G88 are not "
+             "supported; compensation would break spindle synchronisation";
+      return -1;
+    case 50: case 51: case 52: case 70: case 80: case 150: case 160: case 680: case 690:
+      *why = "splines, lathe diameter mode, polar and rotated coordinates are not supported";
+      return -1;
+    default:
+      *why = "unknown G code";
+      return -1;
+  }
+}
+
+enum MGroup { kMStop = 0, kMTool = 1, kMSpindle = 2, kMCoolant = 3, kMOverride = 4, kMOther = 5,
+              kMGroupCount = 6 };
+
+int m_group(int code10, const char** why) {
+  if (code10 % 10 != 0) {
+    *why = "M codes have no decimals";
+    return -1;
+  }
+  const int m = code10 / 10;
+  switch (m) {
+    case 0: case 1: case 2: case 30: case 60: return kMStop;
+    case 6: return kMTool;
+    case 3: case 4: case 5: case 19: return kMSpindle;
+    case 7: case 8: case 9: return kMCoolant;
+    case 48: case 49: case 50: case 51: case 52: case 53: return kMOverride;
+    case 98: case 99:
+      *why = "M98/M99 subroutine calls are not supported; expand them in CAM";
+      return -1;
+    default:
+      if ((m >= 61 && m <= 68) || (m >= 70 && m <= 73) || (m >= 100 && m <= 199)) return kMOther;
+      *why = "unknown M code";
+      return -1;
+  }
+}
+
+bool is_cycle(int motion) {
+  return motion == 730 || (motion >= 810 && motion <= 890);
+}
+
+}  // namespace
+
+Interpreter::Interpreter(ProgramSetup setup, std::string file)
+    : setup_(std::move(setup)), file_(std::move(file)) {}
+
+void Interpreter::fail(const Block& b, const Word* w, const std::string& msg) const {
+  throw InputError(file_, b.line, w ? static_cast<int>(w->begin) + 1 : 0, msg);
+}
+
+void Interpreter::execute(const Block& b, BlockEffect& effect) {
+  effect = BlockEffect{};
+  if (b.percent || b.words.empty()) return;
+  if (s_.ended) return;  // after M2/M30 nothing executes (LinuxCNC ignores the rest)
+
+  // Step 1 and 2: every word known; one G code per modal group, one M code
+  // per group; no letter twice (except G and M).
+  std::array<const Word*, kGroupCount> g{};
+  std::array<const Word*, kMGroupCount> m{};
+  std::array<const Word*, 26> letter{};
+  unsigned g_mask = 0, m_mask = 0;
+  for (const Word& w : b.words) {
+    if (w.letter == 'G') {
+      const char* why = nullptr;
+      const int grp = w.code10 < 0 ? -1 : g_group(w.code10, &why);
+      if (grp < 0)
+        fail(b, &w, fmt::format("G{} is not supported: {}", b.text.substr(w.begin + 1, w.end - w.begin - 1),
+                                why ? why : "unknown G code"));
+      if (g_mask & (1u << grp))
+        fail(b, &w, "two G codes of the same modal group in one block; put them in separate blocks");
+      g_mask |= 1u << grp;
+      if (grp == kNonModal && g[kNonModal] && g[kNonModal]->code10 != w.code10)
+        fail(b, &w, "two non-modal G codes in one block; split the block");
+      g[static_cast<size_t>(grp)] = &w;
+      continue;
+    }
+    if (w.letter == 'M') {
+      const char* why = nullptr;
+      const int grp = w.code10 < 0 ? -1 : m_group(w.code10, &why);
+      if (grp < 0) fail(b, &w, fmt::format("M code is not supported: {}", why ? why : "unknown M code"));
+      if (grp != kMOther && (m_mask & (1u << grp)))
+        fail(b, &w, "two M codes of the same modal group in one block; split the block");
+      m_mask |= 1u << grp;
+      m[static_cast<size_t>(grp)] = &w;
+      continue;
+    }
+    const char L = w.letter;
+    if (L == 'A' || L == 'B' || L == 'C' || L == 'U' || L == 'V' || L == 'W')
+      fail(b, &w, fmt::format("axis word {} is not supported by the three-axis post-processor; "
+                              "use a five-axis machine definition", L));
+    if (L == 'D' || L == 'E')
+      fail(b, &w, fmt::format("word {} is not supported (cutter compensation, lathe)", L));
+    if (L != 'N' && letter[static_cast<size_t>(L - 'A')])
+      fail(b, &w, fmt::format("word {} appears twice in one block", L));
+    letter[static_cast<size_t>(L - 'A')] = &w;
+  }
+  auto word = [&](char L) { return letter[static_cast<size_t>(L - 'A')]; };
+  const bool any_axis = word('X') || word('Y') || word('Z');
+
+  // Step 3 and 4: execute in RS274NGC order.
+  if (g[kFeedMode]) s_.feed_mode = g[kFeedMode]->code10;
+  if (const Word* f = word('F')) {
+    if (f->value < 0) fail(b, f, "negative feed");
+    s_.feed = f->value;
+  }
+  if (const Word* t = word('T')) {
+    if (t->value < 0 || t->value != std::floor(t->value)) fail(b, t, "T must be a non-negative integer");
+    s_.selected_tool = static_cast<int>(t->value);
+  }
+  if (m[kMTool]) s_.tool = s_.selected_tool;
+  if (g[kNonModal] && g[kNonModal]->code10 == 40 && !word('P'))
+    fail(b, g[kNonModal], "G4 dwell needs a P word (seconds)");
+  if (g[kPlane]) s_.plane = (g[kPlane]->code10 - 170) / 10;
+  if (g[kUnits]) s_.unit_mm = g[kUnits]->code10 == 200 ? 25.4 : 1.0;
+  bool consumed_axes = false;
+  if (g[kToolLength]) {
+    const int c = g[kToolLength]->code10;
+    if (c == 490) {
+      s_.tool_length_active = false;
+      s_.tool_length_mm = 0.0;
+    } else if (c == 430) {
+      const Word* h = word('H');
+      const int tool = h ? static_cast<int>(h->value) : s_.tool;
+      auto it = setup_.tool_length_mm.find(tool);
+      if (it == setup_.tool_length_mm.end())
+        fail(b, g[kToolLength], fmt::format("G43 uses tool {}, which the tool table does not list; "
+                                            "give its length with --tool-table", tool));
+      s_.tool_length_active = true;
+      s_.tool_length_mm = it->second;
+    } else {  // G43.1: dynamic length from the Z word
+      const Word* z = word('Z');
+      if (!z) fail(b, g[kToolLength], "G43.1 needs a Z word (the tool length)");
+      s_.tool_length_active = true;
+      s_.tool_length_mm = z->value * s_.unit_mm;
+      consumed_axes = true;
+      if (word('X') || word('Y')) fail(b, word('X') ? word('X') : word('Y'), "G43.1 takes only Z here");
+    }
+  }
+  if (g[kCoordSystem]) {
+    static constexpr int kCodes[9] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
+    for (int k = 0; k < 9; ++k)
+      if (kCodes[k] == g[kCoordSystem]->code10) s_.coord_system = k;
+  }
+  if (g[kDistance]) s_.absolute = g[kDistance]->code10 == 900;
+  if (g[kArcDistance]) s_.arc_absolute = g[kArcDistance]->code10 == 901;
+  if (g[kReturnMode]) s_.g98 = g[kReturnMode]->code10 == 980;
+  const bool g53 = g[kNonModal] && g[kNonModal]->code10 == 530;
+  effect.g53 = g53;
+  if (g53 && !s_.absolute) fail(b, g[kNonModal], "G53 needs absolute mode (G90)");
+
+  if (g[kMotion]) {
+    s_.motion = g[kMotion]->code10;
+    effect.motion_code = s_.motion;
+  }
+  const bool motion_here = (any_axis && !consumed_axes) || (g[kMotion] && is_cycle(g[kMotion]->code10));
+  if (motion_here && g[kMotion] && g[kMotion]->code10 == 800)
+    fail(b, g[kMotion], "axis words with G80; remove them or use G0/G1");
+  if (g53 && motion_here && s_.motion != 0 && s_.motion != 10)
+    fail(b, g[kNonModal], "G53 works with G0 or G1 only");
+  if (motion_here && s_.motion == 800 && !g[kMotion])
+    fail(b, any_axis ? (word('X') ? word('X') : word('Y') ? word('Y') : word('Z')) : nullptr,
+         "axis words without a motion mode (G80 active); add G0 or G1");
+  if (!motion_here && (word('I') || word('J') || word('K') || word('R')) && !is_cycle(s_.motion))
+    fail(b, word('I') ? word('I') : word('J') ? word('J') : word('K') ? word('K') : word('R'),
+         "arc words without axis words");
+
+  if (motion_here) {
+    const Eigen::Vector3d& wo = work_offset();
+    Eigen::Vector3d target = s_.position_mm;
+    std::array<bool, 3> given{};
+    for (int a = 0; a < 3; ++a) {
+      const Word* w = word("XYZ"[a]);
+      if (!w) continue;
+      given[static_cast<size_t>(a)] = true;
+      if (s_.absolute)
+        target[a] = w->value * s_.unit_mm + (g53 ? 0.0 : wo[a]);
+      else
+        target[a] = s_.position_mm[a] + w->value * s_.unit_mm;
+    }
+    const bool all_given = given[0] && given[1] && given[2];
+    Motion& mo = effect.motion;
+    mo.start_mm = s_.position_mm;
+    mo.feed = s_.feed;
+    const int mode = s_.motion;
+    if (!s_.position_known && !all_given && mode != 0)
+      fail(b, nullptr, "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
+                       "before the first cutting move");
+    if (mode == 0 || mode == 10) {
+      mo.kind = mode == 0 ? MotionKind::kRapid : MotionKind::kLinear;
+      if (mode == 10 && s_.feed <= 0.0 && s_.feed_mode != 930)
+        fail(b, nullptr, "G1 with no feed rate; add an F word");
+      mo.end_mm = target;
+    } else if (mode == 20 || mode == 30) {
+      if (s_.feed <= 0.0) fail(b, nullptr, "arc with no feed rate; add an F word");
+      const int p = s_.plane;  // in-plane axes (a0, a1) and normal axis n
+      static constexpr int kA0[3] = {0, 2, 1}, kA1[3] = {1, 0, 2}, kN[3] = {2, 1, 0};
+      static constexpr char kOff0[3] = {'I', 'K', 'J'}, kOff1[3] = {'J', 'I', 'K'};
+      const int a0 = kA0[p], a1 = kA1[p];
+      if (!given[static_cast<size_t>(a0)] && !given[static_cast<size_t>(a1)] && !word('R') &&
+          !word(kOff0[p]) && !word(kOff1[p]))
+        fail(b, nullptr, "arc without in-plane end point or centre");
+      mo.kind = MotionKind::kArc;
+      mo.end_mm = target;
+      mo.plane = p;
+      mo.clockwise = mode == 20;
+      const Eigen::Vector2d s2(mo.start_mm[a0], mo.start_mm[a1]);
+      const Eigen::Vector2d e2(target[a0], target[a1]);
+      Eigen::Vector2d c2;
+      if (const Word* r = word('R')) {
+        if (word(kOff0[p]) || word(kOff1[p])) fail(b, r, "arc with both R and I/J/K; use one form");
+        const double R = r->value * s_.unit_mm;
+        const Eigen::Vector2d d = e2 - s2;
+        const double half = d.norm() / 2.0;
+        if (half < 1e-9) fail(b, r, "R-form arc with the end point at the start: a full circle needs I/J/K");
+        if (std::abs(R) < half - 1e-6) fail(b, r, "arc radius R is smaller than half the chord; fix R or the end point");
+        const double h = std::sqrt(std::max(0.0, R * R - half * half));
+        const Eigen::Vector2d mid = (s2 + e2) / 2.0;
+        const Eigen::Vector2d perp(-d.y() / d.norm(), d.x() / d.norm());
+        // Clockwise with positive R: centre to the right of the chord.
+        const double side = (mo.clockwise ? -1.0 : 1.0) * (R > 0 ? 1.0 : -1.0);
+        c2 = mid + side * h * perp;
+      } else {
+        const Word* i0 = word(kOff0[p]);
+        const Word* i1 = word(kOff1[p]);
+        if (!i0 && !i1) fail(b, nullptr, fmt::format("arc needs {} or {} (centre) or R", kOff0[p], kOff1[p]));
+        if (s_.arc_absolute) {
+          c2 = Eigen::Vector2d((i0 ? i0->value * s_.unit_mm + wo[a0] : mo.start_mm[a0]),
+                               (i1 ? i1->value * s_.unit_mm + wo[a1] : mo.start_mm[a1]));
+        } else {
+          c2 = s2 + Eigen::Vector2d(i0 ? i0->value * s_.unit_mm : 0.0, i1 ? i1->value * s_.unit_mm : 0.0);
+        }
+        const double r_start = (s2 - c2).norm(), r_end = (e2 - c2).norm();
+        // LinuxCNC's tolerance: 0.05 mm absolute or 0.1 % relative.
+        if (std::abs(r_start - r_end) > std::max(0.05, 0.001 * r_start))
+          fail(b, i0 ? i0 : i1, fmt::format("radius to end of arc ({:.4f} mm) differs from radius to start "
+                                            "({:.4f} mm); fix the centre or the end point",
+                                            r_end, r_start));
+        if (r_start < 1e-9) fail(b, i0 ? i0 : i1, "arc of zero radius");
+      }
+      mo.center_mm = mo.start_mm;
+      mo.center_mm[a0] = c2.x();
+      mo.center_mm[a1] = c2.y();
+      if (const Word* pw = word('P')) {
+        if (pw->value < 1 || pw->value != std::floor(pw->value)) fail(b, pw, "P (turns) must be a positive integer");
+        mo.extra_turns = static_cast<int>(pw->value) - 1;
+      }
+      (void)kN;
+    } else if (is_cycle(mode)) {
+      if (!s_.absolute)
+        fail(b, nullptr, "canned cycles in incremental mode (G91) are not supported; use G90");
+      if (const Word* l = word('L'); l && l->value != 1)
+        fail(b, l, "canned cycle repeats (L) are not supported; write each hole");
+      if (const Word* z = word('Z')) s_.cycle_z = z->value;
+      else if (g[kMotion]) fail(b, g[kMotion], "canned cycle needs a Z word (hole bottom)");
+      if (const Word* r = word('R')) s_.cycle_r = r->value;
+      else if (g[kMotion]) fail(b, g[kMotion], "canned cycle needs an R word (retract plane)");
+      if ((mode == 830 || mode == 730) && !word('Q') && g[kMotion])
+        fail(b, g[kMotion], "peck drilling needs a Q word (peck depth)");
+      if ((mode == 820 || mode == 890) && !word('P') && g[kMotion])
+        fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
+      if (s_.feed <= 0.0) fail(b, nullptr, "canned cycle with no feed rate; add an F word");
+      mo.kind = MotionKind::kCycle;
+      const double r_mm = s_.cycle_r * s_.unit_mm + wo[2];
+      const double bottom_mm = s_.cycle_z * s_.unit_mm + wo[2];
+      if (bottom_mm > r_mm) fail(b, nullptr, "canned cycle with the hole bottom (Z) above the R plane");
+      mo.end_mm = Eigen::Vector3d(target.x(), target.y(), bottom_mm);
+      mo.r_mm = r_mm;
+      const double initial = s_.position_mm.z();
+      mo.clear_mm = s_.g98 ? std::max(initial, r_mm) : r_mm;
+      target = Eigen::Vector3d(target.x(), target.y(), mo.clear_mm);
+    } else {
+      fail(b, nullptr, "axis words without a motion mode; add G0 or G1");
+    }
+    effect.has_motion = true;
+    s_.position_mm = target;
+    if (all_given || s_.position_known) s_.position_known = true;
+    if (!s_.position_known && all_given) s_.position_known = true;
+  }
+  if (m[kMStop]) {
+    effect.stop_code = true;
+    const int c = m[kMStop]->code10;
+    if (c == 20 || c == 300) s_.ended = true;
+  }
+}
+
+void read_var_file(const std::string& path, ProgramSetup& setup) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open the parameter (.var) file; check the path");
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    std::istringstream ls(line);
+    int param;
+    double value;
+    if (!(ls >> param)) continue;
+    if (!(ls >> value) || !std::isfinite(value))
+      throw InputError(path, n, "expected \"<parameter> <value>\"");
+    // G54: 5221..5223, each following system 20 further, up to G59.3 (5381).
+    if (param >= 5221 && param <= 5383) {
+      const int k = (param - 5221) / 20, a = (param - 5221) % 20;
+      if (a < 3 && k < 9) setup.work_offset_mm[static_cast<size_t>(k)][a] = value;
+    }
+  }
+}
+
+void read_tool_table(const std::string& path, ProgramSetup& setup) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open the tool table (.tbl); check the path");
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    const size_t semi = line.find(';');
+    if (semi != std::string::npos) line.resize(semi);
+    std::istringstream ls(line);
+    std::string tok;
+    int tool = -1;
+    std::optional<double> z;
+    while (ls >> tok) {
+      const char L = static_cast<char>(std::toupper(static_cast<unsigned char>(tok[0])));
+      double v = 0;
+      try {
+        size_t used = 0;
+        v = std::stod(tok.substr(1), &used);
+        if (used != tok.size() - 1) throw std::invalid_argument("x");
+      } catch (const std::exception&) {
+        throw InputError(path, n, fmt::format("bad entry \"{}\"; expected letter and number (T1 P1 Z12.5)", tok));
+      }
+      if (L == 'T') tool = static_cast<int>(v);
+      if (L == 'Z') z = v;
+    }
+    if (tool < 0) continue;
+    setup.tool_length_mm[tool] = z.value_or(0.0);
+  }
+}
+
+}  // namespace volmap::nc

@@ -1,0 +1,114 @@
+// Modal interpretation of RS274NGC blocks into motions in machine
+// coordinates (mm). Validation comes first, in numbered steps as grbl does:
+// (1) every word known, (2) at most one G code per modal group and one M code
+// per group (bitmask), (3) the values make sense for the active state, (4)
+// only then the state changes and motions are produced. A block that fails
+// any step raises InputError naming file:line and what to do.
+//
+// Supported: G0 G1 G2 G3 (centre I J K and R forms, full circles, helices,
+// P turns), G17 G18 G19, G20 G21, G90 G91, G90.1 G91.1, G53, G54-G59.3,
+// G43 H / G43.1 / G49, G80-G89 (G73 G81 G82 G83 G85 G86 G89 in G90 with
+// G98/G99), G93 G94 G95, G4, G40, G61 G61.1 G64, G96 G97, F S T, M0-M9,
+// M30, M48 M49 M60 and other M codes (passed through), N numbers, block
+// delete (executed), comments. Everything else is refused with a reason:
+// volmap never passes through a construct it did not understand.
+//
+// Machine coordinates here are those of the controlled point (the tool tip
+// with tool length compensation, LinuxCNC's convention): program position
+// times units plus the active work offset, or the G53 value.
+#pragma once
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "gcode/nc_block.h"
+
+namespace volmap::nc {
+
+struct ProgramSetup {
+  /// G54 .. G59.3 (index 0 .. 8): machine position of each program origin, mm.
+  std::array<Eigen::Vector3d, 9> work_offset_mm{};
+  /// Tool table: tool (pocket) number -> length, mm.
+  std::map<int, double> tool_length_mm;
+};
+
+enum class MotionKind { kRapid, kLinear, kArc, kCycle };
+
+struct Motion {
+  MotionKind kind = MotionKind::kLinear;
+  Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();  ///< machine coordinates
+  Eigen::Vector3d end_mm = Eigen::Vector3d::Zero();
+  // Arcs: centre (in the plane; its coordinate along the plane normal is the
+  // start's), plane 0 = XY (G17), 1 = ZX (G18), 2 = YZ (G19), direction,
+  // extra full turns.
+  Eigen::Vector3d center_mm = Eigen::Vector3d::Zero();
+  int plane = 0;
+  bool clockwise = false;
+  int extra_turns = 0;
+  // Canned cycles: hole at end_mm (x, y, bottom z); r plane and the level
+  // the tool returns to (G98: initial level, G99: R).
+  double r_mm = 0.0;
+  double clear_mm = 0.0;
+  double feed = 0.0;  ///< as programmed (units/min, inverse time, per rev)
+};
+
+struct State {
+  double unit_mm = 1.0;        ///< 25.4 under G20
+  bool absolute = true;        ///< G90
+  bool arc_absolute = false;   ///< G90.1
+  int plane = 0;               ///< 0 XY, 1 ZX, 2 YZ
+  int motion = 0;              ///< G code x 10 of the modal motion (0, 10, 20, 30, 800+)
+  int coord_system = 0;        ///< 0 = G54 .. 8 = G59.3
+  bool tool_length_active = false;
+  double tool_length_mm = 0.0; ///< of the active compensation
+  int tool = 0;                ///< T in the spindle (after M6)
+  int selected_tool = 0;       ///< last T word
+  bool g98 = true;             ///< canned cycle return to the initial level
+  double cycle_r = 0.0, cycle_z = 0.0;  ///< modal R and Z of canned cycles (program units)
+  double feed = 0.0;
+  int feed_mode = 940;         ///< 930, 940, 950
+  Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  ///< machine coordinates
+  bool position_known = false; ///< false until the first move sets all axes
+  bool ended = false;          ///< after M2 / M30
+};
+
+/// What one block did, for the post-processor: its motion (at most one), and
+/// for every axis word the machine coordinate it names.
+struct BlockEffect {
+  bool has_motion = false;
+  Motion motion;
+  bool g53 = false;
+  bool stop_code = false;  ///< M0 M1 M2 M30 M60 in the block
+  int motion_code = -1;    ///< motion G code written in this block, x10, or -1
+};
+
+class Interpreter {
+ public:
+  Interpreter(ProgramSetup setup, std::string file);
+
+  /// Interprets one block. Throws InputError on anything refused.
+  void execute(const Block& b, BlockEffect& effect);
+
+  const State& state() const { return s_; }
+  const ProgramSetup& setup() const { return setup_; }
+  /// Work offset of the active coordinate system, mm.
+  const Eigen::Vector3d& work_offset() const { return setup_.work_offset_mm[static_cast<size_t>(s_.coord_system)]; }
+
+ private:
+  [[noreturn]] void fail(const Block& b, const Word* w, const std::string& msg) const;
+  ProgramSetup setup_;
+  std::string file_;
+  State s_;
+};
+
+/// Reads a LinuxCNC parameter (.var) file's work offsets (parameters
+/// 5221-5223 for G54, 20 apart up to G59.3). Throws InputError.
+void read_var_file(const std::string& path, ProgramSetup& setup);
+/// Reads a LinuxCNC tool table (.tbl): "T1 P1 Z12.5 ... ;comment".
+void read_tool_table(const std::string& path, ProgramSetup& setup);
+
+}  // namespace volmap::nc

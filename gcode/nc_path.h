@@ -1,0 +1,26 @@
+// The nominal geometry of a motion: the point at path parameter s in [0, 1]
+// (linear in length for lines and helices), and its length.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "gcode/nc_interpreter.h"
+
+namespace volmap::nc {
+
+/// Arc parameters in the motion's plane: start angle, signed sweep (rad,
+/// negative clockwise, full turns included), radius, in-plane axis indices.
+struct ArcGeometry {
+  int a0 = 0, a1 = 1, normal = 2;
+  double start_angle = 0, sweep = 0, radius = 0;
+  double end_radius = 0;  ///< differs from radius within the reader's tolerance: a spiral
+};
+ArcGeometry arc_geometry(const Motion& m);
+
+/// Point at s in [0, 1] of a line, arc or helix (machine coordinates, mm).
+/// Canned cycles and rapids are straight lines from start to end here.
+Eigen::Vector3d point_on(const Motion& m, double s);
+
+double path_length_mm(const Motion& m);
+
+}  // namespace volmap::nc

@@ -1,0 +1,46 @@
+// The correction of a commanded point of a three-axis machine: the position
+// to command so that the actual tool tip lands on the nominal one, the
+// solution of  x_cmd + e(x_cmd) = x_nominal  (Hsu Fig. 5, "-du", solved
+// exactly by fixed-point iteration rather than to first order).
+//
+// Frames: machine coordinates of the controlled point (mm), as LinuxCNC uses
+// them: program position + work offset. The machine file's tool
+// (tool.length_mm) is the reference tool: for it, machine coordinates are the
+// machine's axis values. A tool of another length L (G43) puts its tip where
+// the reference tool's would be, by shifting the axes (tool length
+// compensation); its error is that of the machine with tool length L at the
+// shifted axes (angular errors times the longer lever).
+#pragma once
+
+#include <memory>
+
+#include <Eigen/Core>
+
+#include "core/error_model.h"
+
+namespace volmap::post {
+
+class Corrector {
+ public:
+  /// `machine` must have exactly three linear axes and no rotary axis.
+  Corrector(const Machine& machine, const ErrorSet& errors, double tool_length_mm,
+            OutsidePolicy outside);
+
+  /// Tool-tip error at commanded machine position p (mm, machine frame),
+  /// as a displacement in machine coordinates: actual = p + error_at(p).
+  Eigen::Vector3d error_at(const Eigen::Vector3d& p_machine_mm,
+                           const ApproachDirections& dir) const;
+  /// The commanded position whose actual tip is p_nominal (|residual| < 1e-9 mm).
+  Eigen::Vector3d command_for(const Eigen::Vector3d& p_nominal_mm,
+                              const ApproachDirections& dir) const;
+  /// True when the machine has no errors at all (the output must equal the input).
+  bool zero() const { return zero_; }
+
+ private:
+  std::unique_ptr<ErrorModel> model_;
+  Eigen::Matrix3d M_u_tip_;       ///< d(machine coordinate)/d(tip, workpiece frame)
+  Eigen::Vector3d axis_shift_mm_;  ///< tool length compensation of this tool
+  bool zero_ = false;
+};
+
+}  // namespace volmap::post

@@ -1,0 +1,50 @@
+// volmap post, three-axis: rewrites an NC program written for the ideal
+// machine so that the real machine (its error model) cuts the nominal
+// geometry.
+//
+// Policy (docs/post.md):
+//  - every commanded point moves to the solution of x_cmd + e(x_cmd) = x_nom
+//    (Corrector), in the frame and units of the program (G20/G21, G90/G91,
+//    G53, G54-G59.3, tool length from G43);
+//  - feed moves (G1) are split until the actual path, sampled at 1/4, 1/2,
+//    3/4 of every piece, stays within the tolerance of the nominal line;
+//    arcs (G2/G3, helices, full circles) are linearised the same way, with
+//    the chord error inside the same tolerance; under G93 every piece gets
+//    its inverse-time F so the programmed time is kept;
+//  - rapid moves (G0) are corrected at their end point only (not cutting);
+//    a rapid before X, Y and Z are all known passes unchanged;
+//  - canned cycles: the hole position and depth (X, Y, Z at the bottom) and
+//    the R plane are corrected; every cycle block then states Z and R;
+//  - lines that need no change are written byte for byte; a changed line
+//    keeps its other words in their order; added lines follow it.
+// Streaming, constant memory: one block at a time.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+
+#include "core/error_model.h"
+#include "gcode/nc_interpreter.h"
+
+namespace volmap::post {
+
+struct PostOptions {
+  double tolerance_mm = 1e-3;
+  int decimals = -1;  ///< -1: 4 for mm blocks, 5 for inch blocks
+  OutsidePolicy outside = OutsidePolicy::kError;
+};
+
+struct PostReport {
+  std::uint64_t lines = 0;
+  std::uint64_t lines_changed = 0;
+  std::uint64_t lines_added = 0;
+  std::uint64_t points_corrected = 0;
+  double max_correction_mm = 0.0;
+};
+
+PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
+                        const Machine& machine, const ErrorSet& errors,
+                        const nc::ProgramSetup& setup, const PostOptions& options);
+
+}  // namespace volmap::post
