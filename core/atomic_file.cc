@@ -1,0 +1,94 @@
+#include "core/atomic_file.h"
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <stdexcept>
+#include <system_error>
+
+#include <unistd.h>
+
+namespace volmap {
+namespace {
+std::atomic<unsigned> temp_counter{0};
+
+std::filesystem::path normalised(const std::string& p) {
+  std::error_code ec;
+  std::filesystem::path out = std::filesystem::weakly_canonical(p, ec);
+  if (ec) out = std::filesystem::absolute(p, ec).lexically_normal();
+  return out;
+}
+}  // namespace
+
+void refuse_output_equal_to_input(const std::string& output,
+                                  const std::vector<std::string>& inputs) {
+  if (output == "-") return;
+  const std::filesystem::path out = normalised(output);
+  for (const std::string& in : inputs) {
+    if (in.empty() || in == "-") continue;
+    std::error_code ec;
+    const bool same_file = std::filesystem::equivalent(output, in, ec) && !ec;
+    if (same_file || normalised(in) == out)
+      throw std::invalid_argument(output + ": the output is also an input (" + in +
+                                  "); write the output to another path");
+  }
+}
+
+AtomicOutput::AtomicOutput(std::string path, const std::vector<std::string>& inputs)
+    : path_(std::move(path)) {
+  refuse_output_equal_to_input(path_, inputs);
+  if (path_ == "-") {
+    to_stdout_ = true;
+    return;
+  }
+  temp_path_ = path_ + ".tmp-" + std::to_string(::getpid()) + "-" +
+               std::to_string(temp_counter.fetch_add(1));
+  file_.open(temp_path_, std::ios::binary | std::ios::trunc);
+  if (!file_) {
+    const std::string reason = std::generic_category().message(errno);
+    throw std::runtime_error(path_ + ": cannot create the output (" + reason +
+                             "); check that the folder exists and is writable");
+  }
+}
+
+AtomicOutput::~AtomicOutput() {
+  if (committed_ || to_stdout_) return;
+  file_.close();
+  std::remove(temp_path_.c_str());
+}
+
+std::ostream& AtomicOutput::stream() {
+  if (to_stdout_) return buffer_;
+  return file_;
+}
+
+void AtomicOutput::commit() {
+  if (committed_) return;
+  if (to_stdout_) {
+    std::cout << buffer_.str();
+    std::cout.flush();
+    if (!std::cout) throw std::runtime_error("<stdout>: write error");
+    committed_ = true;
+    return;
+  }
+  file_.flush();
+  const bool ok = static_cast<bool>(file_);
+  file_.close();
+  if (!ok || file_.fail()) {
+    std::remove(temp_path_.c_str());
+    committed_ = true;
+    throw std::runtime_error(path_ + ": write error; check the free space and the device");
+  }
+  if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    const std::string reason = std::generic_category().message(errno);
+    std::remove(temp_path_.c_str());
+    committed_ = true;
+    throw std::runtime_error(path_ + ": cannot rename the finished output into place (" +
+                             reason + ")");
+  }
+  committed_ = true;
+}
+
+}  // namespace volmap
