@@ -58,6 +58,10 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
       fail(file, line, i,
            "# parameters are not supported: the post-processor needs literal numbers; "
            "expand parameters in CAM (or with LinuxCNC's interpreter) first");
+    if (c == '@' || c == '^')
+      fail(file, line, i,
+           "polar coordinates (@ radius, ^ angle; a LinuxCNC extension) are not supported; "
+           "output X and Y from CAM");
     if (c == '[')
       fail(file, line, i,
            "[ ] expressions are not supported; output literal numbers from CAM");

@@ -101,7 +101,13 @@ bool is_cycle(int motion) {
 }  // namespace
 
 Interpreter::Interpreter(ProgramSetup setup, std::string file)
-    : setup_(std::move(setup)), file_(std::move(file)) {}
+    : setup_(std::move(setup)), file_(std::move(file)) {
+  if (setup_.initial_position_mm) {
+    s_.position_mm = *setup_.initial_position_mm;
+    s_.position_known = true;
+    s_.axis_known = {true, true, true};
+  }
+}
 
 void Interpreter::fail(const Block& b, const Word* w, const std::string& msg) const {
   throw InputError(file_, b.line, w ? static_cast<int>(w->begin) + 1 : 0, msg);
@@ -211,7 +217,14 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     s_.motion = g[kMotion]->code10;
     effect.motion_code = s_.motion;
   }
-  const bool motion_here = (any_axis && !consumed_axes) || (g[kMotion] && is_cycle(g[kMotion]->code10));
+  // A G2/G3 with centre words but no axis words is a full circle (LinuxCNC).
+  static constexpr char kOffsetLetters[3][2] = {{'I', 'J'}, {'K', 'I'}, {'J', 'K'}};
+  const int arc_plane = g[kPlane] ? (g[kPlane]->code10 - 170) / 10 : s_.plane;
+  const int arc_mode = g[kMotion] ? g[kMotion]->code10 : s_.motion;
+  const bool full_circle = !any_axis && (arc_mode == 20 || arc_mode == 30) &&
+                           (word(kOffsetLetters[arc_plane][0]) || word(kOffsetLetters[arc_plane][1]));
+  const bool motion_here = (any_axis && !consumed_axes) || full_circle ||
+                           (g[kMotion] && is_cycle(g[kMotion]->code10));
   if (motion_here && g[kMotion] && g[kMotion]->code10 == 800)
     fail(b, g[kMotion], "axis words with G80; remove them or use G0/G1");
   if (g53 && motion_here && s_.motion != 0 && s_.motion != 10)
@@ -236,14 +249,15 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       else
         target[a] = s_.position_mm[a] + w->value * s_.unit_mm;
     }
-    const bool all_given = given[0] && given[1] && given[2];
     Motion& mo = effect.motion;
     mo.start_mm = s_.position_mm;
     mo.feed = s_.feed;
     const int mode = s_.motion;
-    if (!s_.position_known && !all_given && mode != 0)
+    bool known_after = true;
+    for (int a = 0; a < 3; ++a) known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] || given[static_cast<size_t>(a)]);
+    if (!known_after && mode != 0)
       fail(b, nullptr, "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
-                       "before the first cutting move");
+                       "before the first cutting move, or give --initial-position");
     if (mode == 0 || mode == 10) {
       mo.kind = mode == 0 ? MotionKind::kRapid : MotionKind::kLinear;
       if (mode == 10 && s_.feed <= 0.0 && s_.feed_mode != 930)
@@ -332,8 +346,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     }
     effect.has_motion = true;
     s_.position_mm = target;
-    if (all_given || s_.position_known) s_.position_known = true;
-    if (!s_.position_known && all_given) s_.position_known = true;
+    for (int a = 0; a < 3; ++a)
+      if (given[static_cast<size_t>(a)] || mo.kind == MotionKind::kCycle) s_.axis_known[static_cast<size_t>(a)] = true;
+    s_.position_known = s_.axis_known[0] && s_.axis_known[1] && s_.axis_known[2];
   }
   if (m[kMStop]) {
     effect.stop_code = true;

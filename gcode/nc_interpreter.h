@@ -20,6 +20,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,11 @@ struct ProgramSetup {
   std::array<Eigen::Vector3d, 9> work_offset_mm{};
   /// Tool table: tool (pocket) number -> length, mm.
   std::map<int, double> tool_length_mm;
+  /// Where the tool stands when the program starts (machine coordinates, mm),
+  /// when known: lets a program that never commands an axis (a 2D plasma
+  /// program without Z) be corrected. Unknown by default: then the first
+  /// feed move must come after a rapid that sets X, Y and Z.
+  std::optional<Eigen::Vector3d> initial_position_mm;
 };
 
 enum class MotionKind { kRapid, kLinear, kArc, kCycle };
@@ -72,7 +78,8 @@ struct State {
   double feed = 0.0;
   int feed_mode = 940;         ///< 930, 940, 950
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  ///< machine coordinates
-  bool position_known = false; ///< false until the first move sets all axes
+  bool position_known = false; ///< false until every axis has been commanded
+  std::array<bool, 3> axis_known{};
   bool ended = false;          ///< after M2 / M30
 };
 

@@ -29,6 +29,10 @@ Corrector::Corrector(const Machine& machine, const ErrorSet& errors,
   bool any = !errors.location.empty();
   for (const auto& a : errors.axis) any = any || a.has_value();
   zero_ = !any;
+  for (int a = 0; a < 3; ++a) {
+    const AxisErrors* ax = errors.errors_of(machine.axis_order[static_cast<size_t>(a)]);
+    bidirectional_[static_cast<size_t>(a)] = ax && ax->bidirectional();
+  }
   model_ = std::make_unique<ErrorModel>(std::move(with_tool), errors, ModelOptions{Formulation::kIndependent, outside});
 }
 
@@ -37,6 +41,32 @@ Eigen::Vector3d Corrector::error_at(const Eigen::Vector3d& p, const ApproachDire
   AxisVector u(3);
   u << p.x() + axis_shift_mm_.x(), p.y() + axis_shift_mm_.y(), p.z() + axis_shift_mm_.z();
   return M_u_tip_ * model_->exact(u, dir).dP_mm;
+}
+
+Eigen::Vector3d Corrector::error_with_play(const Eigen::Vector3d& p, const Eigen::Vector3d& h) const {
+  if (zero_) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d e = error_at(p, ApproachDirections{});
+  for (int a = 0; a < 3; ++a) {
+    if (!bidirectional_[static_cast<size_t>(a)] || h[a] == 0.0) continue;
+    ApproachDirections plus{}, minus{};
+    plus[static_cast<size_t>(a)] = 1;
+    minus[static_cast<size_t>(a)] = -1;
+    e += h[a] * 0.5 * (error_at(p, plus) - error_at(p, minus));
+  }
+  return e;
+}
+
+double Corrector::play_width_mm(int a, const Eigen::Vector3d& p) const {
+  if (!bidirectional_[static_cast<size_t>(a)]) return 0.0;
+  const Machine& m = model_->machine();
+  const AxisName name = m.axis_order[static_cast<size_t>(a)];
+  const AxisErrors* ax = model_->errors().errors_of(name);
+  std::array<double, kComponentCount> plus, minus;
+  const double q = p[a] + axis_shift_mm_[a];
+  evaluate_axis(*ax, q, 1, model_->options().outside, plus);
+  evaluate_axis(*ax, q, -1, model_->options().outside, minus);
+  const int own = static_cast<int>(name);  // EXX for X, EYY for Y, EZZ for Z
+  return std::abs(plus[static_cast<size_t>(own)] - minus[static_cast<size_t>(own)]);
 }
 
 Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal,

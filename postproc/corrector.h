@@ -12,6 +12,7 @@
 // shifted axes (angular errors times the longer lever).
 #pragma once
 
+#include <array>
 #include <memory>
 
 #include <Eigen/Core>
@@ -30,6 +31,16 @@ class Corrector {
   /// as a displacement in machine coordinates: actual = p + error_at(p).
   Eigen::Vector3d error_at(const Eigen::Vector3d& p_machine_mm,
                            const ApproachDirections& dir) const;
+  /// Lost motion as play (a backlash operator): the error with each axis's
+  /// hysteresis state h in [-1, 1] (-1: taken up moving -, +1: moving +),
+  /// blending the two directions' tables: e = e(mean) + sum_a h_a (e(a+) - e(a-)) / 2
+  /// (first order in the direction difference).
+  Eigen::Vector3d error_with_play(const Eigen::Vector3d& p_machine_mm, const Eigen::Vector3d& h) const;
+  /// Width of the play of axis a at p: |EKK(+) - EKK(-)| of its positioning
+  /// error (mm); 0 for an axis without bidirectional data.
+  double play_width_mm(int a, const Eigen::Vector3d& p_machine_mm) const;
+  bool bidirectional(int a) const { return bidirectional_[static_cast<size_t>(a)]; }
+
   /// The commanded position whose actual tip is p_nominal (|residual| < 1e-9 mm).
   Eigen::Vector3d command_for(const Eigen::Vector3d& p_nominal_mm,
                               const ApproachDirections& dir) const;
@@ -41,6 +52,7 @@ class Corrector {
   Eigen::Matrix3d M_u_tip_;       ///< d(machine coordinate)/d(tip, workpiece frame)
   Eigen::Vector3d axis_shift_mm_;  ///< tool length compensation of this tool
   bool zero_ = false;
+  std::array<bool, 3> bidirectional_{};
 };
 
 }  // namespace volmap::post

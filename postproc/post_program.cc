@@ -20,13 +20,39 @@ namespace {
 
 using Eigen::Vector3d;
 
-ApproachDirections directions_of(const Vector3d& from, const Vector3d& to) {
-  ApproachDirections d{};
+// The direction each axis approaches `to` from `from`; an axis that does not
+// move keeps the direction it last moved in (it stands where its last move
+// left it, lost motion taken up that way).
+ApproachDirections directions_of(const Vector3d& from, const Vector3d& to,
+                                 const ApproachDirections& last) {
+  ApproachDirections d = last;
   for (int a = 0; a < 3; ++a) {
     const double delta = to[a] - from[a];
-    d[static_cast<size_t>(a)] = delta > 1e-9 ? 1 : (delta < -1e-9 ? -1 : 0);
+    if (delta > 0) d[static_cast<size_t>(a)] = 1;
+    if (delta < 0) d[static_cast<size_t>(a)] = -1;
   }
   return d;
+}
+
+// An axis the nominal path does not move may still be commanded to creep
+// (the correction varies along the path). A creep against the direction the
+// axis last moved in is eaten by lost motion unless the command takes it up:
+// such an axis gets the direction of its commanded motion, so the command
+// for it includes the take-up step (and the piece containing the step is
+// split until the step stands alone). Returns whether d changed.
+bool settle_directions(const Vector3d& c0, const Vector3d& c1, const Vector3d& n0,
+                       const Vector3d& n1, ApproachDirections& d) {
+  bool changed = false;
+  for (int a = 0; a < 3; ++a) {
+    if (n1[a] != n0[a]) continue;  // the nominal motion sets the direction
+    const double creep = c1[a] - c0[a];
+    const std::int8_t want = creep > 0 ? 1 : (creep < 0 ? -1 : d[static_cast<size_t>(a)]);
+    if (want != d[static_cast<size_t>(a)]) {
+      d[static_cast<size_t>(a)] = want;
+      changed = true;
+    }
+  }
+  return changed;
 }
 
 // One commanded point of the output and the nominal path parameter it ends.
@@ -98,6 +124,7 @@ class ProgramPost {
   PostReport report_;
   Vector3d emitted_mm_ = Vector3d::Zero();  ///< last commanded position written
   bool emitted_known_ = false;
+  ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
   int current_line_ = 0;
   std::string line_ending_;
 };
@@ -117,19 +144,21 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
   struct Pending {
     double s0, s1;
     Vector3d c0;
+    ApproachDirections dir0;  ///< axis directions on arrival at s0
   };
   std::vector<Pending> stack;
   Vector3d c_prev = start_cmd;
   double s_prev = 0.0;
   constexpr int kMaxPieces = 1 << 16;
   for (int k = 1; k <= n0; ++k) {
-    stack.push_back({s_prev, static_cast<double>(k) / n0, c_prev});
+    stack.push_back({s_prev, static_cast<double>(k) / n0, c_prev, last_dir_});
     while (!stack.empty()) {
       const Pending p = stack.back();
       stack.pop_back();
       const Vector3d n0p = nc::point_on(m, p.s0), n1p = nc::point_on(m, p.s1);
-      const ApproachDirections d = directions_of(n0p, n1p);
-      const Vector3d c1 = command(c, n1p, d);
+      ApproachDirections d = directions_of(n0p, n1p, p.dir0);
+      Vector3d c1 = command(c, n1p, d);
+      if (settle_directions(p.c0, c1, n0p, n1p, d)) c1 = command(c, n1p, d);
       bool ok = true;
       for (double t : {0.25, 0.5, 0.75}) {
         const Vector3d x = p.c0 + t * (c1 - p.c0);
@@ -148,12 +177,16 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                        kMaxPieces, tol * 1e3));
         c_prev = c1;
         s_prev = p.s1;
+        last_dir_ = d;
         // Continue with what is left of this initial piece.
-        if (!stack.empty()) stack.back().c0 = c1;
+        if (!stack.empty()) {
+          stack.back().c0 = c1;
+          stack.back().dir0 = d;
+        }
       } else {
         const double mid = 0.5 * (p.s0 + p.s1);
-        stack.push_back({mid, p.s1, Vector3d::Zero()});  // c0 set when reached
-        stack.push_back({p.s0, mid, p.c0});
+        stack.push_back({mid, p.s1, Vector3d::Zero(), p.dir0});  // c0, dir0 set when reached
+        stack.push_back({p.s0, mid, p.c0, p.dir0});
       }
     }
   }
@@ -234,8 +267,9 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
 
   if (m.kind == nc::MotionKind::kRapid || m.kind == nc::MotionKind::kCycle) {
     const ApproachDirections d = m.kind == nc::MotionKind::kCycle
-                                     ? ApproachDirections{0, 0, -1, 0, 0, 0}
-                                     : directions_of(m.start_mm, m.end_mm);
+                                     ? ApproachDirections{last_dir_[0], last_dir_[1], -1, 0, 0, 0}
+                                     : directions_of(m.start_mm, m.end_mm, last_dir_);
+    last_dir_ = d;
     const Vector3d cmd = command(c, m.end_mm, d);
     nc::BlockEdit edit;
     std::string insert;
@@ -272,7 +306,7 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
       // The R plane, corrected where the tool reaches it, stated every block
       // (the correction differs from hole to hole).
       const Vector3d r_nominal(m.end_mm.x(), m.end_mm.y(), m.r_mm);
-      const Vector3d r_cmd = command(c, r_nominal, ApproachDirections{0, 0, -1, 0, 0, 0});
+      const Vector3d r_cmd = command(c, r_nominal, d);
       const double r_new = (r_cmd.z() - interp_.work_offset()[2]) / s.unit_mm;
       const double r_nom = (m.r_mm - interp_.work_offset()[2]) / s.unit_mm;
       if (changed || std::abs(r_new - r_nom) >= half_unit) {
@@ -358,10 +392,17 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
   emit(nc::apply_edit(b, edit));
   ++report_.lines_changed;
   emitted_mm_ = pieces[0].command_mm;
+  std::string previous_words = words_for(pieces[0].command_mm, 0.0, pieces[0].s_end);
   for (size_t k = 1; k < pieces.size(); ++k) {
+    const std::string w = words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end);
+    // A piece below the output resolution (a lost-motion step at a
+    // reversal) would repeat the line before it: the controller cannot
+    // command it, so it is not written.
+    if (w == previous_words && !g93 && s.absolute) continue;
+    previous_words = w;
     std::string l = lower ? "g1" : "G1";
     if (spaces) l += ' ';
-    l += words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end);
+    l += w;
     emit(l);
     ++report_.lines_added;
     emitted_mm_ = pieces[k].command_mm;

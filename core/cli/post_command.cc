@@ -19,7 +19,7 @@ namespace {
 
 Runner register_post(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, table, work_offset, var_file, tool_table, in, out;
+    std::string machine, errors, table, work_offset, var_file, tool_table, initial, in, out;
     double tolerance_um = 1.0;
     int decimals = -1;
     bool clamp = false;
@@ -35,6 +35,7 @@ Runner register_post(CLI::App& app) {
   sub->add_option("--work-offset", o->work_offset, "Machine position X,Y,Z (mm) of the program origin for G54");
   sub->add_option("--var-file", o->var_file, "LinuxCNC parameter file with the G54-G59.3 offsets");
   sub->add_option("--tool-table", o->tool_table, "LinuxCNC tool table (.tbl) for G43 H");
+  sub->add_option("--initial-position", o->initial, "Where the tool stands at the start, X,Y,Z in program coordinates (mm or inch as the program starts); for programs that never command an axis");
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
@@ -48,11 +49,16 @@ Runner register_post(CLI::App& app) {
     nc::ProgramSetup setup;
     if (!o->var_file.empty()) nc::read_var_file(o->var_file, setup);
     if (!o->work_offset.empty()) {
-      Machine three = m;  // parse X,Y,Z as mm
       const AxisVector wo = parse_axis_position(m, o->work_offset, "--work-offset");
       for (int a = 0; a < 3; ++a) setup.work_offset_mm[0][a] = wo[a];
     }
     if (!o->tool_table.empty()) nc::read_tool_table(o->tool_table, setup);
+    if (!o->initial.empty()) {
+      Machine any = m;
+      for (auto& L : any.limits) L.unlimited = true;  // a program position, not an axis value
+      const AxisVector p = parse_axis_position(any, o->initial, "--initial-position");
+      setup.initial_position_mm = Eigen::Vector3d(p[0], p[1], p[2]) + setup.work_offset_mm[0];
+    }
     post::PostOptions opt;
     opt.tolerance_mm = o->tolerance_um * 1e-3;
     opt.decimals = o->decimals;

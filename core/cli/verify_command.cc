@@ -1,0 +1,80 @@
+// volmap verify: nominal and compensated programs on the simulated machine.
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "core/cli/commands.h"
+#include "core/cli/parse_util.h"
+#include "core/errors_csv.h"
+#include "core/input_error.h"
+#include "core/machine_json.h"
+#include "postproc/verify.h"
+
+namespace volmap::cli {
+namespace {
+
+Runner register_verify(CLI::App& app) {
+  struct Opts {
+    std::string machine, errors, nominal, program, work_offset, var_file, tool_table;
+    double step_mm = 0.25;
+    bool json = false, clamp = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* sub = app.add_subcommand("verify", "Run a nominal program (uncompensated) and its compensated version on the simulated real machine; report the deviation of the actual tool path");
+  sub->add_option("--machine", o->machine, "Machine definition (JSON)")->required();
+  sub->add_option("--errors", o->errors, "Errors CSV (errors.md)")->required();
+  sub->add_option("--nominal", o->nominal, "The program as written for the ideal machine")->required();
+  sub->add_option("--program", o->program, "The compensated program (volmap post)")->required();
+  sub->add_option("--work-offset", o->work_offset, "Machine position X,Y,Z (mm) of the program origin for G54");
+  sub->add_option("--var-file", o->var_file, "LinuxCNC parameter file with the G54-G59.3 offsets");
+  sub->add_option("--tool-table", o->tool_table, "LinuxCNC tool table (.tbl) for G43 H");
+  sub->add_option("--sample-step-mm", o->step_mm, "Largest distance between samples along a move (default 0.25; at least 8 per move)")->check(CLI::PositiveNumber);
+  sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
+  sub->add_flag("--json", o->json, "Write one JSON document to stdout");
+  sub->footer("Example:\n  volmap verify --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
+              "      --work-offset 100,100,50 --nominal part.ngc --program part-compensated.ngc --json");
+  return [o]() -> int {
+    const Machine m = load_machine_json(o->machine);
+    const ErrorSet e = load_errors_csv(o->errors);
+    nc::ProgramSetup setup;
+    if (!o->var_file.empty()) nc::read_var_file(o->var_file, setup);
+    if (!o->work_offset.empty()) {
+      const AxisVector wo = parse_axis_position(m, o->work_offset, "--work-offset");
+      for (int a = 0; a < 3; ++a) setup.work_offset_mm[0][a] = wo[a];
+    }
+    if (!o->tool_table.empty()) nc::read_tool_table(o->tool_table, setup);
+    std::ifstream a(o->nominal, std::ios::binary), b(o->program, std::ios::binary);
+    if (!a) throw InputError(o->nominal, 0, "cannot open the nominal program; check the path");
+    if (!b) throw InputError(o->program, 0, "cannot open the compensated program; check the path");
+    post::VerifyOptions opt;
+    opt.sample_step_mm = o->step_mm;
+    opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+    const post::VerifyResult r = post::verify_programs(a, o->nominal, b, o->program, m, e, setup, opt);
+    if (o->json) {
+      nlohmann::ordered_json doc;
+      auto stats = [](const post::DeviationStats& s) {
+        return nlohmann::ordered_json{{"max_um", s.max_um}, {"rms_um", s.rms_um}, {"samples", s.samples},
+                                      {"worst_line", s.worst_line}};
+      };
+      doc["before"] = stats(r.before);
+      doc["after"] = stats(r.after);
+      std::cout << doc.dump(2) << "\n";
+      return 0;
+    }
+    std::cout << fmt::format("deviation of the actual tool path from the nominal one (feed moves)\n"
+                             "  before (nominal program, uncompensated): max {:8.3f} um  rms {:8.3f} um  ({} samples, worst at line {})\n"
+                             "  after  (compensated program):           max {:8.3f} um  rms {:8.3f} um  ({} samples, worst at line {})\n",
+                             r.before.max_um, r.before.rms_um, r.before.samples, r.before.worst_line,
+                             r.after.max_um, r.after.rms_um, r.after.samples, r.after.worst_line);
+    return 0;
+  };
+}
+
+}  // namespace
+
+static const CommandRegistration kVerify(50, register_verify);
+
+}  // namespace volmap::cli
