@@ -130,7 +130,11 @@ ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
           errors_.file, name, machine_.name));
   }
 
-  const Eigen::Vector3d tip_s = -machine_.tool_length_mm * machine_.tool_axis;
+  // The measurement levers use the tool of the measurement.
+  const double measured_tool_mm = std::isnan(machine_.measurement_tool_length_mm)
+                                      ? machine_.tool_length_mm
+                                      : machine_.measurement_tool_length_mm;
+  const Eigen::Vector3d tip_s = -measured_tool_mm * machine_.tool_axis;
   auto bind = [&](const std::vector<Joint>& chain, ChainSide side,
                   std::vector<BoundJoint>& out) {
     for (const Joint& j : chain) {

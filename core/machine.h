@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -63,6 +64,10 @@ struct Machine {
   /// spindle (Lei & Hsu's Q). The tip is spindle - tool_length_mm * axis.
   Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();
   double tool_length_mm = 0.0;
+  /// Tool length of the measurement (kinematic-parameter-independent model:
+  /// the tool whose tip the laser saw). NaN: the same as tool_length_mm.
+  /// Set when tool_length_mm is changed to model another tool.
+  double measurement_tool_length_mm = std::numeric_limits<double>::quiet_NaN();
   /// Kinematic-parameter-independent model (Hsu, section III.B): for each
   /// linear axis, the positions of the other axes while its component errors
   /// were measured at the tool tip (by AxisVector index; own entry unused).

@@ -76,6 +76,16 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
     w.letter = letter;
     w.begin = static_cast<std::uint32_t>(i);
     ++i;
+    {
+      size_t k = i;
+      while (k < n && is_space(text[k])) ++k;
+      if (k < n && text[k] == '#')
+        fail(file, line, k,
+             "# parameters are not supported: the post-processor needs literal numbers; "
+             "expand parameters in CAM (or with LinuxCNC's interpreter) first");
+      if (k < n && text[k] == '[')
+        fail(file, line, k, "[ ] expressions are not supported; output literal numbers from CAM");
+    }
     // The number: sign, digits, point; spaces allowed between its characters.
     std::string number;
     size_t last = i;

@@ -254,7 +254,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     mo.feed = s_.feed;
     const int mode = s_.motion;
     bool known_after = true;
-    for (int a = 0; a < 3; ++a) known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] || given[static_cast<size_t>(a)]);
+    for (int a = 0; a < 3; ++a)
+      known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] ||
+                                    (given[static_cast<size_t>(a)] && s_.absolute));
     if (!known_after && mode != 0)
       fail(b, nullptr, "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
                        "before the first cutting move, or give --initial-position");
@@ -346,8 +348,11 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     }
     effect.has_motion = true;
     s_.position_mm = target;
+    // An incremental word moves from where the axis is: it makes an unknown
+    // axis no better known.
     for (int a = 0; a < 3; ++a)
-      if (given[static_cast<size_t>(a)] || mo.kind == MotionKind::kCycle) s_.axis_known[static_cast<size_t>(a)] = true;
+      if ((given[static_cast<size_t>(a)] && s_.absolute) || mo.kind == MotionKind::kCycle)
+        s_.axis_known[static_cast<size_t>(a)] = true;
     s_.position_known = s_.axis_known[0] && s_.axis_known[1] && s_.axis_known[2];
   }
   if (m[kMStop]) {

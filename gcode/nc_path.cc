@@ -1,5 +1,6 @@
 #include "gcode/nc_path.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace volmap::nc {
@@ -46,6 +47,29 @@ double path_length_mm(const Motion& m) {
   if (m.kind != MotionKind::kArc) return (m.end_mm - m.start_mm).norm();
   const ArcGeometry g = arc_geometry(m);
   return std::hypot(g.radius * g.sweep, m.end_mm[g.normal] - m.start_mm[g.normal]);
+}
+
+double distance_to_path(const Motion& m, const Eigen::Vector3d& p) {
+  if (m.kind != MotionKind::kArc) {
+    const Eigen::Vector3d d = m.end_mm - m.start_mm;
+    const double len2 = d.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((p - m.start_mm).dot(d) / len2, 0.0, 1.0) : 0.0;
+    return (m.start_mm + t * d - p).norm();
+  }
+  // Arc or helix: the point of the path at the sample's angle, and the ends.
+  const ArcGeometry g = arc_geometry(m);
+  const double ang = std::atan2(p[g.a1] - m.center_mm[g.a1], p[g.a0] - m.center_mm[g.a0]);
+  double best = std::min((p - m.start_mm).norm(), (p - m.end_mm).norm());
+  // Every turn of the sweep that passes this angle.
+  const double dir = g.sweep >= 0 ? 1.0 : -1.0;
+  double rel = dir * (ang - g.start_angle);
+  rel = std::fmod(rel, 2 * M_PI);
+  if (rel < 0) rel += 2 * M_PI;
+  for (double a = rel; a <= std::abs(g.sweep) + 1e-12; a += 2 * M_PI) {
+    const double s = a / std::abs(g.sweep);
+    best = std::min(best, (point_on(m, std::clamp(s, 0.0, 1.0)) - p).norm());
+  }
+  return best;
 }
 
 }  // namespace volmap::nc

@@ -23,4 +23,7 @@ Eigen::Vector3d point_on(const Motion& m, double s);
 
 double path_length_mm(const Motion& m);
 
+/// Distance (mm) from p to the nearest point of the motion's path.
+double distance_to_path(const Motion& m, const Eigen::Vector3d& p);
+
 }  // namespace volmap::nc

@@ -1,5 +1,6 @@
 #include "postproc/corrector.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include <Eigen/LU>
@@ -23,6 +24,8 @@ Corrector::Corrector(const Machine& machine, const ErrorSet& errors,
   if (!lu.isInvertible()) throw std::invalid_argument("the machine's linear axes do not span space");
   M_u_tip_ = lu.inverse();
   Machine with_tool = machine;
+  if (std::isnan(with_tool.measurement_tool_length_mm))
+    with_tool.measurement_tool_length_mm = machine.tool_length_mm;
   with_tool.tool_length_mm = tool_length_mm;
   const Eigen::Vector3d tipL = nominal_forward(with_tool, zero).tip_mm;
   axis_shift_mm_ = M_u_tip_ * (tip0 - tipL);

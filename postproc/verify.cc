@@ -66,29 +66,6 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
   return out;
 }
 
-double distance_to_move(const nc::Motion& m, const Vector3d& p) {
-  if (m.kind != nc::MotionKind::kArc) {
-    const Vector3d d = m.end_mm - m.start_mm;
-    const double len2 = d.squaredNorm();
-    const double t = len2 > 0 ? std::clamp((p - m.start_mm).dot(d) / len2, 0.0, 1.0) : 0.0;
-    return (m.start_mm + t * d - p).norm();
-  }
-  // Arc or helix: the point of the path at the sample's angle, and the ends.
-  const nc::ArcGeometry g = nc::arc_geometry(m);
-  const double ang = std::atan2(p[g.a1] - m.center_mm[g.a1], p[g.a0] - m.center_mm[g.a0]);
-  double best = std::min((p - m.start_mm).norm(), (p - m.end_mm).norm());
-  // Every turn of the sweep that passes this angle.
-  const double dir = g.sweep >= 0 ? 1.0 : -1.0;
-  double rel = dir * (ang - g.start_angle);
-  rel = std::fmod(rel, 2 * M_PI);
-  if (rel < 0) rel += 2 * M_PI;
-  for (double a = rel; a <= std::abs(g.sweep) + 1e-12; a += 2 * M_PI) {
-    const double s = a / std::abs(g.sweep);
-    best = std::min(best, (nc::point_on(m, std::clamp(s, 0.0, 1.0)) - p).norm());
-  }
-  return best;
-}
-
 class Run {
  public:
   Run(const Machine& machine, const ErrorSet& errors, OutsidePolicy outside)
@@ -138,7 +115,7 @@ DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector
       const size_t lo = cursor > 2 ? cursor - 2 : 0;
       const size_t hi = std::min(nominal.size(), cursor + 4);
       for (size_t i = lo; i < hi; ++i) {
-        const double dist = distance_to_move(nominal[i].motion, actual);
+        const double dist = nc::distance_to_path(nominal[i].motion, actual);
         if (dist < best) {
           best = dist;
           best_i = i;

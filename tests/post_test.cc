@@ -1,0 +1,222 @@
+// The NC reader and the three-axis post-processor: byte-for-byte identity
+// on a zero-error machine, the correction against the model solved by
+// hand, refusals of unsupported constructs with file:line, and the modes
+// (inch, incremental, work offsets, tool length, canned cycles).
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "core/errors_csv.h"
+#include "core/input_error.h"
+#include "core/machine_json.h"
+#include "gcode/nc_block.h"
+#include "gcode/nc_interpreter.h"
+#include "gcode/nc_writer.h"
+#include "postproc/corrector.h"
+#include "postproc/post_program.h"
+#include "postproc/verify.h"
+#include "tests/support/test_paths.h"
+
+namespace volmap {
+namespace {
+
+Machine hsu() { return load_machine_json(test::source_path("samples/machines/hsu-3axis.json")); }
+ErrorSet hsu_errors() { return load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv")); }
+
+nc::ProgramSetup offset_setup(double x, double y, double z) {
+  nc::ProgramSetup s;
+  s.work_offset_mm[0] = Eigen::Vector3d(x, y, z);
+  return s;
+}
+
+std::string post(const std::string& program, const ErrorSet& errors, const nc::ProgramSetup& setup,
+                 double tol_um = 1.0) {
+  std::istringstream in(program);
+  std::ostringstream out;
+  post::PostOptions o;
+  o.tolerance_mm = tol_um * 1e-3;
+  post::post_program(in, "prog.ngc", out, hsu(), errors, setup, o);
+  return out.str();
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+const char* kLinuxCncPrograms[] = {"tort.ngc", "arcspiral.ngc", "3dtest.ngc", "cds.ngc"};
+const char* kNcFiles = "/usr/share/linuxcnc/ncfiles/";
+
+TEST(NcBlock, KeepsSpansAndScalesCodes) {
+  const nc::Block b = nc::lex_block("N10 g1 x 1 0.5 Y-2 (comment) G38.2 ; rest", 3, "f.ngc");
+  ASSERT_EQ(b.words.size(), 5u);
+  EXPECT_EQ(b.words[1].code10, 10);
+  EXPECT_DOUBLE_EQ(b.words[2].value, 10.5);  // spaces inside a number
+  EXPECT_EQ(b.text.substr(b.words[2].begin, b.words[2].end - b.words[2].begin), "x 1 0.5");
+  EXPECT_EQ(b.words[4].code10, 382);
+  EXPECT_EQ(b.comment, "comment");
+}
+
+TEST(NcBlock, RefusesWhatItDoesNotRead) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"o100 sub", "O-word"},       {"G1 X#1", "# parameters"},  {"G1 X[1+2]", "expressions"},
+      {"G1 X", "has no number"},        {"G1 Y - ", "has no number"},   {"G1 (open", "not closed"},   {"G0 @1 ^30", "polar"},
+  };
+  for (const auto& [text, words] : cases) {
+    try {
+      nc::lex_block(text, 7, "p.ngc");
+      ADD_FAILURE() << text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("p.ngc:7:", 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"G41 D1", "cutter radius compensation"},
+      {"G0 G1 X1", "same modal group"},
+      {"G28", "stored positions"},
+      {"G92 X0", "G92"},
+      {"G38.2 Z-5", "probing"},
+      {"M98 P100", "subroutine"},
+      {"G0 A10", "axis word A"},
+      {"X1 X2", "twice"},
+      {"G1 X1 Y1 Z1", "no feed rate"},
+      {"G0 X0 Y0 Z0\nF100 G2 X10 Y0 I3 J0", "radius to end of arc"},
+      {"F100 G1 X5", "unknown position"},
+      {"G0 X0 Y0 Z0\nG43 H7", "tool table"},
+      {"G0 X0 Y0 Z0\nG91 F10 G81 Z-1 R1", "incremental"},
+      {"G91 F10 G1 X1 Y1 Z1", "unknown position"},
+  };
+  for (const auto& [text, words] : cases) {
+    try {
+      post(text, hsu_errors(), offset_setup(100, 100, 100));
+      ADD_FAILURE() << text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("prog.ngc:", 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << text << " -> " << e.what();
+    }
+  }
+}
+
+TEST(NcWriter, FormatsDeterministically) {
+  EXPECT_EQ(nc::format_number(12.5, 4), "12.5");
+  EXPECT_EQ(nc::format_number(3.0, 4), "3");
+  EXPECT_EQ(nc::format_number(-0.00001, 4), "0");
+  EXPECT_EQ(nc::format_number(-1.23456, 4), "-1.2346");
+}
+
+// Property: a machine without errors gets its program back byte for byte,
+// for the bundled real programs and odd formatting (CRLF, no final newline).
+TEST(Post, ZeroErrorMachineReturnsTheInputByteForByte) {
+  const ErrorSet none;
+  std::vector<std::string> programs = {
+      "%\r\nG21 G90\r\nG0 X0 Y0 Z5\r\ng1 f100 x10 y 2\r\nG2 X20 Y2 I5 J0\r\n%",
+      "G20\nG0X0Y0Z1\nG91 G1 F5 X.5\nG90\nM2\n",
+  };
+  for (const char* name : kLinuxCncPrograms)
+    if (std::filesystem::exists(std::string(kNcFiles) + name))
+      programs.push_back(read_file(std::string(kNcFiles) + name));
+  for (const std::string& p : programs) {
+    nc::ProgramSetup s = offset_setup(250, 200, 100);
+    s.tool_length_mm[1] = 10.0;
+    EXPECT_EQ(post(p, none, s), p);
+  }
+}
+
+// The correction solves x_cmd + e(x_cmd) = x_nom: with a constant error the
+// command is the nominal point minus the error, exactly.
+TEST(Post, ConstantErrorIsSubtracted) {
+  std::istringstream csv("X,EXX,EYX,EZX\n0,5,-3,2\n500,5,-3,2\n");
+  const ErrorSet e = read_errors_csv(csv, "const.csv");
+  const std::string out = post("G21 G90\nG0 X10 Y20 Z30\n", e, offset_setup(100, 100, 100));
+  EXPECT_EQ(out, "G21 G90\nG0 X9.995 Y20.003 Z29.998\n");
+}
+
+// A linear error field: the command solves x + k x = p exactly
+// (x = p / (1 + k)); the fixed point must find it, not the first-order
+// guess p - k p.
+TEST(Post, ExactSolutionNotFirstOrder) {
+  std::istringstream csv("X,EXX\n0,0\n500,2000\n");  // k = 4e-3 (exaggerated on purpose)
+  const ErrorSet e = read_errors_csv(csv, "scale.csv");
+  const std::string out = post("G21\nG0 X400 Y0 Z0\n", e, offset_setup(0, 0, 0));
+  // x = 400 / 1.004 = 398.406375; first order would give 398.4.
+  EXPECT_NE(out.find("X398.4064"), std::string::npos) << out;
+}
+
+TEST(Post, InchIncrementalAndKeptWords) {
+  std::istringstream csv("X,EXX\n0,25.4\n500,25.4\n");  // 25.4 um = 0.001 inch
+  const ErrorSet e = read_errors_csv(csv, "inch.csv");
+  const std::string out = post("G20 G90\nN5 G0 X1 Y1 Z1 (to start)\nG91\nN7 g0 x2 M8\n", e,
+                               offset_setup(100, 100, 100));
+  // Absolute: X1 -> 0.999; incremental after a corrected point: 2 stays 2
+  // (both ends carry the same correction), so the line is unchanged.
+  EXPECT_EQ(out, "G20 G90\nN5 G0 X0.999 Y1 Z1 (to start)\nG91\nN7 g0 x2 M8\n");
+}
+
+TEST(Post, ToolLengthChangesTheLever) {
+  // A pitch of the Z carriage (EBZ): the tool tip moves by EBZ times the
+  // tool length (Hsu Table II: EBZ has no position gain at the gauge line
+  // of the measured tool, the longer tool adds its extra length).
+  std::istringstream csv("Z,EBZ\n0,100\n300,100\n");
+  const ErrorSet e = read_errors_csv(csv, "ebz.csv");
+  nc::ProgramSetup s = offset_setup(100, 100, 100);
+  s.tool_length_mm[2] = 150.0;  // 50 mm longer than the machine's 100 mm probe
+  const std::string out = post("G21\nG0 X0 Y0 Z0\nT2 M6 G43 H2\nG0 X1 Y0 Z0\n", e, s);
+  // Independent form: measured with the 100 mm tool, the 150 mm one has a
+  // 50 mm longer lever below the pivot: dx = -EBZ * 50 mm = -5 um.
+  EXPECT_NE(out.find("G0 X1.005 Y0 Z0"), std::string::npos) << out;
+}
+
+TEST(Post, CannedCycleHolePositionAndDepth) {
+  std::istringstream csv("X,EXX\n0,10\n500,10\n\nZ,EZZ\n0,-20\n300,-20\n");
+  const ErrorSet e = read_errors_csv(csv, "cycle.csv");
+  const std::string out =
+      post("G21 G90 G98\nG0 X0 Y0 Z10\nF100 G81 X5 Y5 Z-2 R2\nX15\nG80\n", e, offset_setup(100, 100, 100));
+  EXPECT_EQ(out, "G21 G90 G98\nG0 X-0.01 Y0 Z10.02\nF100 G81 X4.99 Y5 Z-1.98 R2.02\nX14.99 Z-1.98 R2.02\nG80\n");
+}
+
+TEST(Post, StopCodeWithASegmentedMoveIsRefused) {
+  try {
+    post("G21\nG0 X0 Y0 Z0\nF100 G2 X10 Y0 I5 J0 M0\n", hsu_errors(), offset_setup(100, 100, 100));
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("stop code"), std::string::npos);
+  }
+}
+
+// The path between points: verify (the model sampled densely) finds the
+// compensated program within tolerance where the nominal one is not.
+TEST(Post, SegmentedPathStaysWithinToleranceOnRealPrograms) {
+  for (const char* name : {"tort.ngc", "arcspiral.ngc", "3dtest.ngc"}) {
+    const std::string path = std::string(kNcFiles) + name;
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "LinuxCNC programs not installed";
+    const std::string in = read_file(path);
+    const nc::ProgramSetup s = offset_setup(250, 200, 100);
+    for (double tol_um : {1.0, 5.0}) {
+      const std::string out = post(in, hsu_errors(), s, tol_um);
+      std::istringstream a(in), b(out);
+      const post::VerifyResult r = post::verify_programs(a, name, b, "out.ngc", hsu(), hsu_errors(), s, {});
+      EXPECT_GT(r.before.max_um, 15.0) << name;
+      // Tolerance plus the rounding of the written numbers (4 decimals in
+      // mm, 5 in inch: at most 0.22 um in space).
+      EXPECT_LT(r.after.max_um, tol_um + 0.25) << name << " tol " << tol_um;
+    }
+  }
+}
+
+TEST(Post, DeterministicOutput) {
+  const std::string p = "G21\nG0 X0 Y0 Z5\nF200 G1 X100 Y50 Z0\nG3 X120 Y70 R20\n";
+  EXPECT_EQ(post(p, hsu_errors(), offset_setup(100, 100, 100)),
+            post(p, hsu_errors(), offset_setup(100, 100, 100)));
+}
+
+}  // namespace
+}  // namespace volmap
