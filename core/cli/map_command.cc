@@ -1,0 +1,247 @@
+// volmap map: builds the gridded volumetric error / correction table of a
+// machine (maps/, docs/maps.md) and writes it as a binary table file.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include "core/cli/commands.h"
+#include "core/errors_csv.h"
+#include "core/machine_json.h"
+#include "maps/output_file.h"
+#include "maps/table_builder.h"
+#include "maps/table_file.h"
+
+namespace volmap::cli {
+
+namespace {
+
+std::vector<double> parse_spacing(const Machine& m, const std::string& text) {
+  std::vector<double> out;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    const std::string cell =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    double v = 0;
+    const auto res = std::from_chars(cell.data(), cell.data() + cell.size(), v);
+    if (cell.empty() || res.ec != std::errc() || res.ptr != cell.data() + cell.size() ||
+        !(v > 0.0) || !std::isfinite(v))
+      throw std::invalid_argument(
+          fmt::format("--spacing {}: \"{}\" is not a positive number", text, cell));
+    out.push_back(v);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  std::string order;
+  for (AxisName a : m.axis_order) order += std::string(order.empty() ? "" : ",") + axis_char(a);
+  if (static_cast<int>(out.size()) != m.axis_count())
+    throw std::invalid_argument(fmt::format("--spacing {}: expected {} values ({}, mm and degrees), got {}",
+                                            text, m.axis_count(), order, out.size()));
+  for (int i = 0; i < m.axis_count(); ++i)
+    if (is_rotary(m.axis_order[static_cast<size_t>(i)])) out[static_cast<size_t>(i)] *= M_PI / 180.0;
+  return out;
+}
+
+double display(AxisName a, double v) { return is_rotary(a) ? v * 180.0 / M_PI : v; }
+const char* unit(AxisName a) { return is_rotary(a) ? "deg" : "mm"; }
+
+std::string layer_name(const maps::VolumetricTable& t, int layer) {
+  if (t.bidirectional_axes.empty()) return "both directions";
+  std::string s;
+  const ApproachDirections d = t.layer_directions(layer);
+  for (int a : t.bidirectional_axes)
+    s += fmt::format("{}{}{}", s.empty() ? "" : " ", axis_char(t.grid[static_cast<size_t>(a)].axis),
+                     d[static_cast<size_t>(a)] > 0 ? "+" : "-");
+  return s;
+}
+
+Runner register_map(CLI::App& app) {
+  struct Opts {
+    std::string machine, errors, spacing, output, interpolation = "linear",
+        model = "independent";
+    double tolerance_um = 0.0;
+    int threads = 0;
+    bool json = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* sub = app.add_subcommand(
+      "map", "Gridded table of the tool-tip error dv and the correction du over the travel "
+             "(binary table file, docs/maps.md)");
+  sub->add_option("--machine", o->machine, "Machine definition (JSON, docs/machine-format.md)")
+      ->required();
+  sub->add_option("--errors", o->errors, "Errors CSV (errors.md)")->required();
+  CLI::Option* spacing = sub->add_option(
+      "--spacing", o->spacing,
+      "Grid spacing per axis SX,SY,SZ[,SA,SC] (mm, degrees); nodes on multiples of the spacing "
+      "from each travel's start, the last node at the travel's end");
+  sub->add_option("--tolerance-um", o->tolerance_um,
+                  "Automatic spacing: the coarsest grid whose interpolation error against the "
+                  "model stays below this (um; three-axis machines; default 1 without --spacing)")
+      ->excludes(spacing);
+  sub->add_option("--interpolation", o->interpolation,
+                  "Interpolation the tolerance is checked with: linear (default, as controllers "
+                  "do) or cubic")
+      ->check(CLI::IsMember({"linear", "cubic"}));
+  sub->add_option("--model", o->model, "independent (Hsu Table II, default) or dependent (Table I)")
+      ->check(CLI::IsMember({"independent", "dependent"}));
+  sub->add_option("--threads", o->threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(1, 256));
+  sub->add_option("-o,--output", o->output, "Table file to write (- for standard output)")
+      ->required();
+  sub->add_flag("--json", o->json, "Write the summary as one JSON document to stdout");
+  sub->footer(
+      "Example:\n  volmap map --machine samples/machines/hsu-3axis.json "
+      "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt");
+
+  return [o]() -> int {
+    maps::refuse_output_equal_to_input(o->output, {o->machine, o->errors});
+    if (o->output == "-" && !o->json && isatty(1))
+      throw std::invalid_argument("-o -: refusing to write a binary table to a terminal; "
+                                  "redirect standard output or give a file");
+    const Machine m = load_machine_json(o->machine);
+    const Formulation f = o->model == "dependent" ? Formulation::kDependent
+                                                  : Formulation::kIndependent;
+    const ErrorModel model(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
+    const maps::Interpolation method = maps::parse_interpolation(o->interpolation);
+    const int threads = o->threads > 0 ? o->threads
+                                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+
+    maps::BuildOptions build;
+    build.threads = threads;
+    const bool bar = isatty(2) != 0;
+    if (bar) {
+      build.progress = [](std::int64_t done, std::int64_t total) {
+        const int width = 40;
+        const int filled = total > 0 ? static_cast<int>(width * done / total) : width;
+        std::cerr << fmt::format("\rmap [{:<{}}] {:3d}%", std::string(static_cast<size_t>(filled), '#'),
+                                 width, total > 0 ? static_cast<int>(100 * done / total) : 100)
+                  << std::flush;
+        if (done == total) std::cerr << "\r" << std::string(52, ' ') << "\r" << std::flush;
+      };
+    }
+    maps::CheckOptions check;
+    check.method = method;
+    check.threads = threads;
+
+    maps::VolumetricTable table;
+    maps::BuildSummary summary;
+    maps::CheckResult checked;
+    if (!o->spacing.empty()) {
+      table = maps::build_table(model, parse_spacing(m, o->spacing), build, &summary);
+      checked = maps::check_table(model, table, check);
+      table.achieved_um = checked.max_um();
+      table.checked_with = method;
+    } else {
+      const double tol = o->tolerance_um > 0.0 ? o->tolerance_um : 1.0;
+      if (bar) std::cerr << "map: searching the spacing for " << tol << " um..." << std::flush;
+      maps::AutoSpacingResult r = maps::build_for_tolerance(model, tol, check, build);
+      if (bar) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
+      table = std::move(r.table);
+      summary = r.build;
+      checked = r.check;
+    }
+
+    if (o->output == "-") {
+      maps::write_table(std::cout, table);
+      std::cout.flush();
+    } else {
+      maps::save_table(o->output, table);
+    }
+
+    // Largest |dv| and |du| over the nodes (um).
+    double max_dv = 0.0, max_du = 0.0;
+    const std::optional<int> ux = table.channel("ux");
+    for (int layer = 0; layer < table.layer_count(); ++layer)
+      for (std::int64_t n = 0; n < table.node_count(); ++n) {
+        const double* v = table.at(layer, n);
+        max_dv = std::max(max_dv, std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * 1e3);
+        if (ux) {
+          const double* d = v + *ux;
+          max_du = std::max(max_du, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * 1e3);
+        }
+      }
+
+    if (o->output == "-") return 0;  // stdout holds the table
+    if (o->json) {
+      nlohmann::ordered_json doc;
+      doc["table"] = o->output;
+      doc["machine"] = table.machine_name;
+      doc["errors"] = table.errors_source;
+      doc["model"] = o->model;
+      nlohmann::ordered_json grid = nlohmann::ordered_json::array();
+      for (const maps::GridAxis& g : table.grid)
+        grid.push_back({{"axis", std::string(1, axis_char(g.axis))},
+                        {"unit", unit(g.axis)},
+                        {"start", display(g.axis, g.start)},
+                        {"end", display(g.axis, g.end)},
+                        {"spacing", display(g.axis, g.spacing)},
+                        {"nodes", g.count},
+                        {"uniform", g.uniform()}});
+      doc["grid"] = grid;
+      doc["nodes"] = table.node_count();
+      nlohmann::ordered_json layers = nlohmann::ordered_json::array();
+      for (int l = 0; l < table.layer_count(); ++l) layers.push_back(layer_name(table, l));
+      doc["layers"] = layers;
+      doc["channels"] = table.channels;
+      doc["bytes"] = table.size_bytes();
+      doc["max_dv_um"] = max_dv;
+      if (ux) doc["max_du_um"] = max_du;
+      doc["interpolation"] = maps::interpolation_name(method);
+      if (table.tolerance_um > 0.0) doc["tolerance_um"] = table.tolerance_um;
+      doc["max_interpolation_error_um"] = checked.max_um();
+      doc["max_interpolation_error_dv_um"] = checked.max_dv_um;
+      if (ux) doc["max_interpolation_error_du_um"] = checked.max_du_um;
+      doc["check_points_per_layer"] = checked.points;
+      doc["correction_clamped_nodes"] = summary.correction_clamped;
+      doc["build_seconds"] = summary.seconds;
+      doc["threads"] = threads;
+      std::cout << doc.dump(2) << "\n";
+      return 0;
+    }
+    std::cout << fmt::format("Volumetric table of {} ({} model, errors {})\n",
+                             table.machine_name.empty() ? o->machine : table.machine_name, o->model,
+                             table.errors_source);
+    for (const maps::GridAxis& g : table.grid)
+      std::cout << fmt::format("  {}  {:g}..{:g} {}  spacing {:g}  {} nodes{}\n", axis_char(g.axis),
+                               display(g.axis, g.start), display(g.axis, g.end), unit(g.axis),
+                               display(g.axis, g.spacing), g.count,
+                               g.uniform() ? "" : " (last cell shorter)");
+    std::string layers;
+    for (int l = 0; l < table.layer_count(); ++l)
+      layers += (l ? ", " : "") + layer_name(table, l);
+    std::cout << fmt::format("  {} nodes x {} direction layer{} ({}), {:.1f} MiB\n",
+                             table.node_count(), table.layer_count(),
+                             table.layer_count() > 1 ? "s" : "", layers,
+                             static_cast<double>(table.size_bytes()) / (1 << 20));
+    std::cout << fmt::format("  max |dv| {:.3f} um", max_dv);
+    if (ux) std::cout << fmt::format(", max |du| {:.3f} um", max_du);
+    std::cout << "\n";
+    std::cout << fmt::format(
+        "  interpolation error ({}) max {:.4f} um{} over {} cell centres and random points per layer\n",
+        maps::interpolation_name(method), checked.max_um(),
+        table.tolerance_um > 0.0 ? fmt::format(" (tolerance {:g} um)", table.tolerance_um) : "",
+        checked.points);
+    if (summary.correction_clamped > 0)
+      std::cout << fmt::format("  {} nodes' corrections reach beyond the travel (error held at the "
+                               "travel end)\n",
+                               summary.correction_clamped);
+    std::cout << fmt::format("  built in {:.3f} s on {} thread{}; written {}\n", summary.seconds,
+                             threads, threads > 1 ? "s" : "", o->output);
+    return 0;
+  };
+}
+
+}  // namespace
+
+static const CommandRegistration kMap(40, register_map);
+
+}  // namespace volmap::cli
