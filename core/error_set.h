@@ -98,11 +98,6 @@ void prepare_lookup(ErrorSet& errors);
 std::vector<double> pchip_slopes(const std::vector<double>& x,
                                  const std::vector<double>& y);
 
-/// Sets the derived lookup fields of a table (uniform_inv_step). Call after
-/// filling position; evaluation is correct without it, only slower.
-void prepare_lookup(AxisErrorTable& table);
-void prepare_lookup(ErrorSet& errors);
-
 /// PCHIP slopes for a periodic table (y.front() == y.back(), the span
 /// x.back() - x.front() is one period): every knot, the two ends included,
 /// takes the interior Fritsch–Carlson slope with its neighbours across the
