@@ -10,35 +10,14 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/cli_run.h"
 #include "tests/support/test_paths.h"
 
 namespace {
 
-struct Result {
-  int status;
-  std::string out, err;
-};
+using Result = volmap::test::CliResult;
 
-Result run(const std::string& args) {
-  // One file per call and process: ctest runs test cases in parallel.
-  static int calls = 0;
-  const std::string err_file = ::testing::TempDir() + "volmap_cli_err_" +
-                               std::to_string(getpid()) + "_" + std::to_string(++calls) + ".txt";
-  const std::string cmd = volmap::test::volmap_binary() + " " + args + " 2>" + err_file;
-  Result r{};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  if (FILE* f = fopen(err_file.c_str(), "r")) {
-    while ((n = fread(buf.data(), 1, buf.size(), f)) > 0) r.err.append(buf.data(), n);
-    fclose(f);
-  }
-  std::remove(err_file.c_str());
-  return r;
-}
+Result run(const std::string& args) { return volmap::test::run_volmap(args); }
 
 std::string sample(const std::string& rel) { return volmap::test::source_path("samples/" + rel); }
 

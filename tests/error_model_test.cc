@@ -14,6 +14,7 @@
 #include "core/kinematics.h"
 #include "core/machine_json.h"
 #include "core/sensitivity.h"
+#include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -28,16 +29,7 @@ Machine hsu3() {
   return load_machine_json(test::source_path("samples/machines/hsu-3axis.json"));
 }
 
-AxisVector random_pose(const Machine& m, std::mt19937& rng) {
-  AxisVector u(m.axis_count());
-  for (int i = 0; i < m.axis_count(); ++i) {
-    const AxisLimits& L = m.limits[static_cast<size_t>(i)];
-    std::uniform_real_distribution<double> d(L.unlimited ? -2 * M_PI : L.min,
-                                             L.unlimited ? 2 * M_PI : L.max);
-    u[i] = d(rng);
-  }
-  return u;
-}
+using test::random_pose;
 
 // A random error set: every component error of every axis a smooth random
 // curve (5 knots over the travel, or a closed 0..360 degree table for an

@@ -26,6 +26,7 @@
 #include "core/plan.h"
 #include "core/sensitivity.h"
 #include "core/simulate.h"
+#include "tests/support/cli_run.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -283,30 +284,9 @@ TEST(Identify, SetupOffsetsPerRun) {
 
 // ---- command line --------------------------------------------------------
 
-struct Result {
-  int status;
-  std::string out, err;
-};
+using Result = test::CliResult;
 
-Result run(const std::string& args) {
-  static int calls = 0;
-  const std::string err_file = ::testing::TempDir() + "volmap_identify_err_" + std::to_string(getpid()) + "_" +
-                               std::to_string(++calls) + ".txt";
-  const std::string cmd = test::volmap_binary() + " " + args + " 2>" + err_file;
-  Result r{};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  if (FILE* f = fopen(err_file.c_str(), "r")) {
-    while ((n = fread(buf.data(), 1, buf.size(), f)) > 0) r.err.append(buf.data(), n);
-    fclose(f);
-  }
-  std::remove(err_file.c_str());
-  return r;
-}
+Result run(const std::string& args) { return test::run_volmap(args); }
 
 bool exists(const std::string& p) { return std::ifstream(p).good(); }
 

@@ -13,6 +13,7 @@
 
 #include "core/jacobian.h"
 #include "core/machine_json.h"
+#include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -20,20 +21,9 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-Machine load(const std::string& name) {
-  return load_machine_json(test::source_path("samples/machines/" + name + ".json"));
-}
+Machine load(const std::string& name) { return test::sample_machine(name); }
 
-AxisVector random_pose(const Machine& m, std::mt19937& rng) {
-  AxisVector u(m.axis_count());
-  for (int i = 0; i < m.axis_count(); ++i) {
-    const AxisLimits& L = m.limits[static_cast<size_t>(i)];
-    std::uniform_real_distribution<double> d(L.unlimited ? -2 * M_PI : L.min,
-                                             L.unlimited ? 2 * M_PI : L.max);
-    u[i] = d(rng);
-  }
-  return u;
-}
+using test::random_pose;
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 Vector6d stack(const ToolPose& v) {

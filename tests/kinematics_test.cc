@@ -18,6 +18,8 @@
 
 #include "core/kinematics.h"
 #include "core/machine_json.h"
+#include "tests/support/cli_run.h"
+#include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -25,20 +27,9 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-Machine load(const std::string& name) {
-  return load_machine_json(test::source_path("samples/machines/" + name + ".json"));
-}
+Machine load(const std::string& name) { return test::sample_machine(name); }
 
-AxisVector random_pose(const Machine& m, std::mt19937& rng) {
-  AxisVector u(m.axis_count());
-  for (int i = 0; i < m.axis_count(); ++i) {
-    const AxisLimits& L = m.limits[static_cast<size_t>(i)];
-    std::uniform_real_distribution<double> d(L.unlimited ? -2 * M_PI : L.min,
-                                             L.unlimited ? 2 * M_PI : L.max);
-    u[i] = d(rng);
-  }
-  return u;
-}
+using test::random_pose;
 
 AxisVector pose(std::initializer_list<double> mm_deg, const Machine& m) {
   AxisVector u(m.axis_count());
@@ -337,30 +328,9 @@ TEST(Kinematics, RejectsMachinesItCannotInvert) {
 
 // ---- volmap kinematics (shared/spec/cli.md) ----
 
-struct Result {
-  int status;
-  std::string out, err;
-};
+using Result = test::CliResult;
 
-Result run(const std::string& args) {
-  static int calls = 0;
-  const std::string err_file = ::testing::TempDir() + "volmap_kin_err_" + std::to_string(getpid()) +
-                               "_" + std::to_string(++calls) + ".txt";
-  const std::string cmd = test::volmap_binary() + " " + args + " 2>" + err_file;
-  Result r{};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  if (FILE* f = fopen(err_file.c_str(), "r")) {
-    while ((n = fread(buf.data(), 1, buf.size(), f)) > 0) r.err.append(buf.data(), n);
-    fclose(f);
-  }
-  std::remove(err_file.c_str());
-  return r;
-}
+Result run(const std::string& args) { return test::run_volmap(args); }
 
 std::string fmt_pose(const ToolPose& v) {
   char buf[256];

@@ -8,7 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/cli/commands.h"
-#include "core/cli/parse_util.h"
+#include "core/cli/program_setup.h"
 #include "core/errors_csv.h"
 #include "core/input_error.h"
 #include "core/machine_json.h"
@@ -19,7 +19,8 @@ namespace {
 
 Runner register_post(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, table, work_offset, var_file, tool_table, initial, in, out;
+    std::string machine, errors, table, in, out;
+    ProgramSetupOptions placement;
     double tolerance_um = 1.0;
     int decimals = -1;
     bool clamp = false;
@@ -32,10 +33,7 @@ Runner register_post(CLI::App& app) {
   errors->excludes(table);
   sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)");
   sub->add_option("--decimals", o->decimals, "Decimals of rewritten numbers (default 4 in mm, 5 in inch)")->check(CLI::Range(0, 9));
-  sub->add_option("--work-offset", o->work_offset, "Machine position X,Y,Z (mm) of the program origin for G54");
-  sub->add_option("--var-file", o->var_file, "LinuxCNC parameter file with the G54-G59.3 offsets");
-  sub->add_option("--tool-table", o->tool_table, "LinuxCNC tool table (.tbl) for G43 H");
-  sub->add_option("--initial-position", o->initial, "Where the tool stands at the start, X,Y,Z in program coordinates (mm or inch as the program starts); for programs that never command an axis");
+  o->placement.add_to(*sub);
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
@@ -46,19 +44,7 @@ Runner register_post(CLI::App& app) {
       throw std::invalid_argument("post needs --errors (table input is not supported yet)");
     const Machine m = load_machine_json(o->machine);
     const ErrorSet e = load_errors_csv(o->errors);
-    nc::ProgramSetup setup;
-    if (!o->var_file.empty()) nc::read_var_file(o->var_file, setup);
-    if (!o->work_offset.empty()) {
-      const AxisVector wo = parse_axis_position(m, o->work_offset, "--work-offset");
-      for (int a = 0; a < 3; ++a) setup.work_offset_mm[0][a] = wo[a];
-    }
-    if (!o->tool_table.empty()) nc::read_tool_table(o->tool_table, setup);
-    if (!o->initial.empty()) {
-      Machine any = m;
-      for (auto& L : any.limits) L.unlimited = true;  // a program position, not an axis value
-      const AxisVector p = parse_axis_position(any, o->initial, "--initial-position");
-      setup.initial_position_mm = Eigen::Vector3d(p[0], p[1], p[2]) + setup.work_offset_mm[0];
-    }
+    const nc::ProgramSetup setup = o->placement.load(m);
     post::PostOptions opt;
     opt.tolerance_mm = o->tolerance_um * 1e-3;
     opt.decimals = o->decimals;
@@ -73,8 +59,8 @@ Runner register_post(CLI::App& app) {
       in_name = o->in;
     }
     std::vector<std::string> inputs{o->in, o->machine, o->errors};
-    if (!o->var_file.empty()) inputs.push_back(o->var_file);
-    if (!o->tool_table.empty()) inputs.push_back(o->tool_table);
+    if (!o->placement.var_file.empty()) inputs.push_back(o->placement.var_file);
+    if (!o->placement.tool_table.empty()) inputs.push_back(o->placement.tool_table);
     if (o->out == "-") {
       // Streams straight out (constant memory); a failure part-way leaves a
       // partial standard output and a non-zero exit status.

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/cli/commands.h"
-#include "core/cli/parse_util.h"
+#include "core/cli/program_setup.h"
 #include "core/errors_csv.h"
 #include "core/input_error.h"
 #include "core/machine_json.h"
@@ -18,7 +18,8 @@ namespace {
 
 Runner register_verify(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, nominal, program, work_offset, var_file, tool_table;
+    std::string machine, errors, nominal, program;
+    ProgramSetupOptions placement;
     double step_mm = 0.25;
     bool json = false, clamp = false;
   };
@@ -28,9 +29,7 @@ Runner register_verify(CLI::App& app) {
   sub->add_option("--errors", o->errors, "Errors CSV (errors.md)")->required();
   sub->add_option("--nominal", o->nominal, "The program as written for the ideal machine")->required();
   sub->add_option("--program", o->program, "The compensated program (volmap post)")->required();
-  sub->add_option("--work-offset", o->work_offset, "Machine position X,Y,Z (mm) of the program origin for G54");
-  sub->add_option("--var-file", o->var_file, "LinuxCNC parameter file with the G54-G59.3 offsets");
-  sub->add_option("--tool-table", o->tool_table, "LinuxCNC tool table (.tbl) for G43 H");
+  o->placement.add_to(*sub);
   sub->add_option("--sample-step-mm", o->step_mm, "Largest distance between samples along a move (default 0.25; at least 8 per move)")->check(CLI::PositiveNumber);
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
@@ -39,13 +38,7 @@ Runner register_verify(CLI::App& app) {
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
     const ErrorSet e = load_errors_csv(o->errors);
-    nc::ProgramSetup setup;
-    if (!o->var_file.empty()) nc::read_var_file(o->var_file, setup);
-    if (!o->work_offset.empty()) {
-      const AxisVector wo = parse_axis_position(m, o->work_offset, "--work-offset");
-      for (int a = 0; a < 3; ++a) setup.work_offset_mm[0][a] = wo[a];
-    }
-    if (!o->tool_table.empty()) nc::read_tool_table(o->tool_table, setup);
+    const nc::ProgramSetup setup = o->placement.load(m);
     std::ifstream a(o->nominal, std::ios::binary), b(o->program, std::ios::binary);
     if (!a) throw InputError(o->nominal, 0, "cannot open the nominal program; check the path");
     if (!b) throw InputError(o->program, 0, "cannot open the compensated program; check the path");
