@@ -178,10 +178,13 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
         c_prev = c1;
         s_prev = p.s1;
         last_dir_ = d;
-        // Continue with what is left of this initial piece.
+        // Continue with all that is left of this initial piece as one piece
+        // (split again only where needed): after a lost-motion step the
+        // rest need not stay cut into ever smaller halves.
         if (!stack.empty()) {
-          stack.back().c0 = c1;
-          stack.back().dir0 = d;
+          const double end = stack.front().s1;
+          stack.clear();
+          stack.push_back({p.s1, end, c1, d});
         }
       } else {
         const double mid = 0.5 * (p.s0 + p.s1);
