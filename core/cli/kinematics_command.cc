@@ -23,26 +23,6 @@ namespace volmap::cli {
 
 namespace {
 
-// "x,y,z,i,j,k": comma-separated finite numbers.
-std::vector<double> parse_numbers(const std::string& text, const std::string& option) {
-  std::vector<double> values;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = text.find(',', start);
-    std::string cell = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    while (!cell.empty() && cell.front() == ' ') cell.erase(cell.begin());
-    while (!cell.empty() && cell.back() == ' ') cell.pop_back();
-    if (!cell.empty() && cell.front() == '+') cell.erase(cell.begin());
-    double v = 0;
-    const auto res = std::from_chars(cell.data(), cell.data() + cell.size(), v);
-    if (cell.empty() || res.ec != std::errc() || res.ptr != cell.data() + cell.size() || !std::isfinite(v))
-      throw std::invalid_argument(fmt::format("{} {}: \"{}\" is not a number", option, text, cell));
-    values.push_back(v);
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return values;
-}
 
 double clean(double x) { return std::abs(x) < 1e-12 ? 0.0 : x; }
 

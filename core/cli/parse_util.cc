@@ -9,8 +9,7 @@
 
 namespace volmap::cli {
 
-AxisVector parse_axis_position(const Machine& m, const std::string& text,
-                               const std::string& option) {
+std::vector<double> parse_numbers(const std::string& text, const std::string& option) {
   std::vector<double> values;
   size_t start = 0;
   while (true) {
@@ -28,6 +27,12 @@ AxisVector parse_axis_position(const Machine& m, const std::string& text,
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
+  return values;
+}
+
+AxisVector parse_axis_position(const Machine& m, const std::string& text,
+                               const std::string& option) {
+  const std::vector<double> values = parse_numbers(text, option);
   std::string order;
   for (AxisName a : m.axis_order) order += std::string(order.empty() ? "" : ",") + axis_char(a);
   if (static_cast<int>(values.size()) != m.axis_count())

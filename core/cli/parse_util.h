@@ -2,10 +2,15 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/machine.h"
 
 namespace volmap::cli {
+
+/// "1,2.5,+3": comma-separated finite numbers (spaces around them allowed).
+/// Throws std::invalid_argument naming the option and the bad cell.
+std::vector<double> parse_numbers(const std::string& text, const std::string& option);
 
 /// "250,200,150[,A,C]": one value per machine axis in axis order, mm and
 /// degrees; returns internal units (mm, rad). Throws std::invalid_argument
