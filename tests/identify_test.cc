@@ -27,22 +27,16 @@
 #include "core/sensitivity.h"
 #include "core/simulate.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/plans.h"
+#include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
 namespace {
 
-Machine machine(const std::string& name) {
-  return load_machine_json(test::source_path("samples/machines/" + name + ".json"));
-}
-ErrorSet errors_from(const std::string& text) {
-  std::istringstream in(text);
-  return read_errors_csv(in, "inline.csv");
-}
-Plan plan_from(const std::string& json, const Machine& m) {
-  std::istringstream in(json);
-  return read_plan_json(in, "plan.json", m);
-}
+Machine machine(const std::string& name) { return test::sample_machine(name); }
+ErrorSet errors_from(const std::string& text) { return test::errors_from_text(text); }
+Plan plan_from(const std::string& json, const Machine& m) { return test::plan_from_text(json, m); }
 std::string sample_text(const std::string& rel) {
   std::ifstream in(test::source_path("samples/" + rel));
   std::stringstream s;

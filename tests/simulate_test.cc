@@ -18,6 +18,8 @@
 #include "core/plan.h"
 #include "core/recordings.h"
 #include "core/simulate.h"
+#include "tests/support/plans.h"
+#include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -26,19 +28,11 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180.0;
 
-Machine machine(const std::string& name) {
-  return load_machine_json(test::source_path("samples/machines/" + name + ".json"));
-}
+Machine machine(const std::string& name) { return test::sample_machine(name); }
 
-ErrorSet errors_from(const std::string& text) {
-  std::istringstream in(text);
-  return read_errors_csv(in, "inline.csv");
-}
+ErrorSet errors_from(const std::string& text) { return test::errors_from_text(text); }
 
-Plan plan_from(const std::string& json, const Machine& m) {
-  std::istringstream in(json);
-  return read_plan_json(in, "plan.json", m);
-}
+Plan plan_from(const std::string& json, const Machine& m) { return test::plan_from_text(json, m); }
 
 EffectSet effects_from(const std::string& json, const Machine& m) {
   std::istringstream in(json);

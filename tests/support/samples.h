@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "core/errors_csv.h"
@@ -17,6 +18,12 @@ inline Machine sample_machine(const std::string& name) {
 }
 inline ErrorSet sample_errors(const std::string& name) {
   return load_errors_csv(source_path("samples/errors/" + name + ".csv"));
+}
+
+/// An errors CSV given as text (named "inline.csv" in messages).
+inline ErrorSet errors_from_text(const std::string& text) {
+  std::istringstream in(text);
+  return read_errors_csv(in, "inline.csv");
 }
 
 /// Uniform over each axis's travel; an unlimited rotary axis over two turns.
