@@ -62,9 +62,23 @@ namespace {
 [[gnu::always_inline]] inline void small_rotation_into(const Eigen::Vector3d& eps_rad,
                                                        Eigen::Matrix3d& R) {
   double sa, ca, sb, cb, sc, cc;
-  small_sincos(eps_rad.x(), sa, ca);
-  small_sincos(eps_rad.y(), sb, cb);
-  small_sincos(eps_rad.z(), sc, cc);
+  if (std::abs(eps_rad.x()) < 1e-3 && std::abs(eps_rad.y()) < 1e-3 &&
+      std::abs(eps_rad.z()) < 1e-3) {
+    // The common case, every angle in small_sincos's first range: the same
+    // series, two angles per packed operation (bit-identical results).
+    using v2d = double __attribute__((vector_size(16)));
+    const v2d x = {eps_rad.x(), eps_rad.y()}, x2 = x * x;
+    const v2d s = x * (1 - x2 * (1.0 / 6) * (1 - x2 * (1.0 / 20)));
+    const v2d c = 1 - x2 * 0.5 * (1 - x2 * (1.0 / 12));
+    sa = s[0], sb = s[1], ca = c[0], cb = c[1];
+    const double z = eps_rad.z(), z2 = z * z;
+    sc = z * (1 - z2 * (1.0 / 6) * (1 - z2 * (1.0 / 20)));
+    cc = 1 - z2 * 0.5 * (1 - z2 * (1.0 / 12));
+  } else {
+    small_sincos(eps_rad.x(), sa, ca);
+    small_sincos(eps_rad.y(), sb, cb);
+    small_sincos(eps_rad.z(), sc, cc);
+  }
   const double scsb = sc * sb, ccsb = cc * sb;
   R(0, 0) = cc * cb;
   R(0, 1) = ccsb * sa - sc * ca;
@@ -76,31 +90,6 @@ namespace {
   R(2, 1) = cb * sa;
   R(2, 2) = cb * ca;
 }
-// Rotation of vectors about a rotary joint's line by angle: a plane rotation
-// when the line is a coordinate axis (4 products a vector), else the matrix.
-class AxisTurn {
- public:
-  AxisTurn(int coordinate_axis, const Eigen::Vector3d& d, double angle_rad)
-      : axis_(coordinate_axis), i_((coordinate_axis + 1) % 3), k_((coordinate_axis + 2) % 3) {
-    sincos_axis(angle_rad, s_, c_);
-    if (axis_ < 0) R_ = axis_rotation(d, angle_rad);
-  }
-  void apply(Eigen::Vector3d& v) const {
-    if (axis_ < 0) {
-      v = R_ * v;
-      return;
-    }
-    const double vi = v[i_], vk = v[k_];
-    v[i_] = c_ * vi - s_ * vk;
-    v[k_] = s_ * vi + c_ * vk;
-  }
-
- private:
-  int axis_, i_, k_;  // the turn mixes coordinates i_ and k_
-  double c_ = 1, s_ = 0;
-  Eigen::Matrix3d R_;
-};
-
 }  // namespace
 
 Eigen::Matrix3d small_rotation_exact(const Eigen::Vector3d& eps_rad) {
@@ -209,6 +198,65 @@ SmallTransform ErrorModel::component_errors(const BoundJoint& bj, double q,
   return e;
 }
 
+namespace {
+// A point (lane 0) and a direction (lane 1) carried through the chain
+// together: c[i] = (p_i, q_i). One packed multiply serves both, and packed
+// IEEE operations round exactly as the scalar ones, so results do not depend
+// on the vector width (GCC/Clang vector extension; SSE2 on x86-64).
+using v2d = double __attribute__((vector_size(16)));
+struct PointDir {
+  v2d c[3];
+  PointDir(const Eigen::Vector3d& p, const Eigen::Vector3d& q)
+      : c{v2d{p.x(), q.x()}, v2d{p.y(), q.y()}, v2d{p.z(), q.z()}} {}
+  Eigen::Vector3d point() const { return {c[0][0], c[1][0], c[2][0]}; }
+  Eigen::Vector3d direction() const { return {c[0][1], c[1][1], c[2][1]}; }
+  // p <- R p, q <- R q (sums in the column order of Eigen's product).
+  [[gnu::always_inline]] void rotate(const Eigen::Matrix3d& R) {
+    const v2d a = c[0], b = c[1], d = c[2];
+    for (int i = 0; i < 3; ++i) c[i] = R(i, 0) * a + R(i, 1) * b + R(i, 2) * d;
+  }
+  // p <- R^T p, q <- R^T q.
+  [[gnu::always_inline]] void rotate_transposed(const Eigen::Matrix3d& R) {
+    const v2d a = c[0], b = c[1], d = c[2];
+    for (int i = 0; i < 3; ++i) c[i] = R(0, i) * a + R(1, i) * b + R(2, i) * d;
+  }
+  // p <- p + t; the direction takes + (-0.0) and - (+0.0), the exact
+  // identities of IEEE arithmetic (signed zeros included), so both lanes stay
+  // in one register.
+  [[gnu::always_inline]] void translate(const Eigen::Vector3d& t) {
+    for (int i = 0; i < 3; ++i) c[i] += v2d{t[i], -0.0};
+  }
+  [[gnu::always_inline]] void translate_back(const Eigen::Vector3d& t) {
+    for (int i = 0; i < 3; ++i) c[i] -= v2d{t[i], 0.0};
+  }
+};
+
+// Rotation about a rotary joint's line by an angle: a plane rotation when
+// the line is a coordinate axis (two coordinates mix), else the matrix.
+class AxisTurn {
+ public:
+  AxisTurn(int coordinate_axis, const Eigen::Vector3d& d, double angle_rad)
+      : axis_(coordinate_axis), i_((coordinate_axis + 1) % 3), k_((coordinate_axis + 2) % 3) {
+    sincos_axis(angle_rad, s_, c_);
+    if (axis_ < 0) R_ = axis_rotation(d, angle_rad);
+  }
+  [[gnu::always_inline]] void apply(PointDir& v) const {
+    if (axis_ < 0) {
+      v.rotate(R_);
+      return;
+    }
+    const v2d vi = v.c[i_], vk = v.c[k_];
+    v.c[i_] = c_ * vi - s_ * vk;
+    v.c[k_] = s_ * vi + c_ * vk;
+  }
+
+ private:
+  int axis_, i_, k_;  // the turn mixes coordinates i_ and k_
+  double c_ = 1, s_ = 0;
+  Eigen::Matrix3d R_;
+};
+}  // namespace
+
 // The exact model as point and direction transformations, never matrix
 // products: the tool tip and tool axis are carried from the spindle down the
 // tool chain to the base (p_b = T_b_s p_s), then up the workpiece chain into
@@ -218,33 +266,45 @@ SmallTransform ErrorModel::component_errors(const BoundJoint& bj, double q,
 // is carried along in the same pass, sharing the rotary axes' sin and cos.
 void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir,
                           ToolPose& actual_pose, ToolPose& nominal_pose) const {
-  // Phase 1: every joint's error transform, independent of the others (the
-  // table lookups overlap in the pipeline instead of waiting on the chain).
+  // Phase 1: every joint's error transform E = [R_e | delta_e], independent
+  // of the others (the table lookups overlap in the pipeline instead of
+  // waiting on the chain).
   constexpr int kMaxJoints = 6;
   std::array<Eigen::Matrix3d, kMaxJoints> R_e;
   std::array<Eigen::Vector3d, kMaxJoints> delta_e;
   const int n_work = static_cast<int>(workpiece_.size());
   const int n_tool = static_cast<int>(tool_.size());
+  std::uint64_t clamped = 0;
   for (int k = 0; k < n_work + n_tool; ++k) {
     const BoundJoint& bj = k < n_work ? workpiece_[static_cast<size_t>(k)]
                                       : tool_[static_cast<size_t>(k - n_work)];
     const Joint& j = *bj.joint;
     const double q = u[j.index];
-    const SmallTransform e = component_errors(bj, q, dir[static_cast<size_t>(j.index)]);
-    small_rotation_into(e.eps_rad, R_e[static_cast<size_t>(k)]);
-    delta_e[static_cast<size_t>(k)] = e.delta_mm;
+    Eigen::Matrix3d& R = R_e[static_cast<size_t>(k)];
+    Eigen::Vector3d& delta = delta_e[static_cast<size_t>(k)];
+    if (!bj.components) {
+      R.setIdentity();
+      delta.setZero();
+      continue;
+    }
+    std::array<double, kComponentCount> v;
+    evaluate_axis(*bj.components, q, dir[static_cast<size_t>(j.index)], options_.outside, v,
+                  &clamped);
+    small_rotation_into(Eigen::Vector3d(v[3], v[4], v[5]), R);
+    delta = Eigen::Vector3d(v[0], v[1], v[2]);
     if (bj.independent) {
       const Eigen::Vector3d r = bj.side == ChainSide::kWorkpiece
                                     ? Eigen::Vector3d(bj.r_meas_mm - q * j.direction_parent)
                                     : bj.r_meas_mm;
-      delta_e[static_cast<size_t>(k)] -= R_e[static_cast<size_t>(k)] * r - r;
+      delta -= R * r - r;
     }
   }
+  if (clamped) clamped_->fetch_add(clamped, std::memory_order_relaxed);
 
   // Phase 2: tool chain, spindle to base: p <- T_parent_j p.
-  Eigen::Vector3d p_a = machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis;
-  Eigen::Vector3d q_a = machine_.tool_axis;
-  Eigen::Vector3d p_n = p_a, q_n = q_a;
+  PointDir a(machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis,
+             machine_.tool_axis);
+  PointDir n = a;
   for (int k = n_tool - 1; k >= 0; --k) {
     const BoundJoint& bj = tool_[static_cast<size_t>(k)];
     const Joint& j = *bj.joint;
@@ -253,23 +313,19 @@ void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir,
     const Eigen::Vector3d& delta = delta_e[static_cast<size_t>(n_work + k)];
     if (j.rotary) {
       const AxisTurn turn(bj.coordinate_axis, j.direction_parent, q);
-      turn.apply(p_n);
-      turn.apply(q_n);
-      turn.apply(p_a);
-      turn.apply(q_a);
-      p_a = R * p_a + delta;  // E(q) Rot(d, q)
-      q_a = R * q_a;
+      turn.apply(n);
+      turn.apply(a);
+      a.rotate(R);  // E(q) Rot(d, q)
+      a.translate(delta);
     } else {
-      p_n += q * j.direction_parent;
-      p_a = R * p_a + delta + q * j.direction_parent;  // Trans(q d) E(q)
-      q_a = R * q_a;
+      n.translate(q * j.direction_parent);
+      a.rotate(R);  // Trans(q d) E(q)
+      a.translate(delta);
+      a.translate(q * j.direction_parent);
     }
-    p_n += j.offset_parent_mm;
-    if (bj.has_location_rotation) {
-      p_a = bj.R_parent_loc * p_a;
-      q_a = bj.R_parent_loc * q_a;
-    }
-    p_a += bj.t_parent_loc_mm;
+    n.translate(j.offset_parent_mm);
+    if (bj.has_location_rotation) a.rotate(bj.R_parent_loc);
+    a.translate(bj.t_parent_loc_mm);
   }
   // Phase 3: workpiece chain, base to workpiece: p <- T_parent_j^-1 p.
   for (int k = 0; k < n_work; ++k) {
@@ -278,30 +334,26 @@ void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir,
     const double q = u[j.index];
     const Eigen::Matrix3d& R = R_e[static_cast<size_t>(k)];
     const Eigen::Vector3d& delta = delta_e[static_cast<size_t>(k)];
-    p_n -= j.offset_parent_mm;
-    p_a -= bj.t_parent_loc_mm;
-    if (bj.has_location_rotation) {
-      p_a = bj.R_parent_loc.transpose() * (p_a);
-      q_a = bj.R_parent_loc.transpose() * (q_a);
-    }
+    n.translate_back(j.offset_parent_mm);
+    a.translate_back(bj.t_parent_loc_mm);
+    if (bj.has_location_rotation) a.rotate_transposed(bj.R_parent_loc);
     if (j.rotary) {
       const AxisTurn turn(bj.coordinate_axis, j.direction_parent, -q);
-      p_a = R.transpose() * (p_a - delta);
-      q_a = R.transpose() * (q_a);
-      turn.apply(p_n);
-      turn.apply(q_n);
-      turn.apply(p_a);
-      turn.apply(q_a);
+      a.translate_back(delta);
+      a.rotate_transposed(R);
+      turn.apply(n);
+      turn.apply(a);
     } else {
-      p_n -= q * j.direction_parent;
-      p_a = R.transpose() * (p_a - delta - q * j.direction_parent);
-      q_a = R.transpose() * (q_a);
+      n.translate_back(q * j.direction_parent);
+      a.translate_back(delta);
+      a.translate_back(q * j.direction_parent);
+      a.rotate_transposed(R);
     }
   }
-  actual_pose.tip_mm = p_a - machine_.workpiece_origin_mm;
-  actual_pose.axis = q_a;
-  nominal_pose.tip_mm = p_n - machine_.workpiece_origin_mm;
-  nominal_pose.axis = q_n;
+  actual_pose.tip_mm = a.point() - machine_.workpiece_origin_mm;
+  actual_pose.axis = a.direction();
+  nominal_pose.tip_mm = n.point() - machine_.workpiece_origin_mm;
+  nominal_pose.axis = n.direction();
 }
 
 ToolPose ErrorModel::actual(const AxisVector& u,
