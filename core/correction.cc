@@ -82,16 +82,23 @@ CorrectionSolver::CorrectionSolver(const ErrorModel& model, CorrectionOptions op
 }
 
 CorrectionResult CorrectionSolver::correct(const AxisVector& u, const ApproachDirections& dir) const {
-  const Machine& m = kin_.machine();
   PoseJacobian J;
-  const ToolPose v = nominal_forward_jacobian(m, u, J);
+  nominal_forward_jacobian(kin_.machine(), u, J);
+  return correct(u, dir, J);
+}
+
+CorrectionResult CorrectionSolver::correct(const AxisVector& u, const ApproachDirections& dir,
+                                           const PoseJacobian& J) const {
+  const Machine& m = kin_.machine();
   const InverseJacobian Jinv(kin_, J, options_.singular_sin);
   CorrectionResult r;
   r.singular = Jinv.singular();
   r.du = AxisVector::Zero(m.axis_count());
-  // One step: J du = -dv (eq. 6 with dv = actual - nominal).
-  const PoseError dv = model_.exact(u, dir);
-  Jinv.solve(-dv.dP_mm, -dv.dQ, r.du);
+  // One step: J du = -dv (eq. 6 with dv = actual - nominal). The model
+  // carries the nominal pose v = F_f,n(u) along with the actual one.
+  ToolPose v;
+  const ToolPose a0 = model_.actual_and_nominal(u, dir, v);
+  Jinv.solve(-(a0.tip_mm - v.tip_mm), -(a0.axis - v.axis), r.du);
   r.iterations = 1;
   AxisVector step(m.axis_count());
   while (r.iterations < options_.max_iterations) {

@@ -42,6 +42,7 @@
 #include <string>
 
 #include "core/error_model.h"
+#include "core/jacobian.h"
 #include "core/kinematics.h"
 
 namespace volmap {
@@ -89,6 +90,10 @@ class CorrectionSolver {
 
   /// du for the commanded (nominal) axis position u, approach directions dir.
   CorrectionResult correct(const AxisVector& u, const ApproachDirections& dir = {}) const;
+  /// The same with the nominal Jacobian J_v_u at u given (e.g. from
+  /// Kinematics::backward_selected, which has it from placing the tip).
+  CorrectionResult correct(const AxisVector& u, const ApproachDirections& dir,
+                           const PoseJacobian& J_v_u) const;
 
  private:
   const ErrorModel& model_;

@@ -80,6 +80,13 @@ class ErrorModel {
 
   /// Actual tool pose (exact HTM products) at axis position u.
   ToolPose actual(const AxisVector& u, const ApproachDirections& dir = {}) const;
+  /// Actual tool pose, and the nominal one at the same u in *nominal.
+  ToolPose actual_and_nominal(const AxisVector& u, const ApproachDirections& dir,
+                              ToolPose& nominal) const {
+    ToolPose a;
+    evaluate(u, dir, a, nominal);
+    return a;
+  }
   /// dv = actual - nominal, exact.
   PoseError exact(const AxisVector& u, const ApproachDirections& dir = {}) const;
   /// dv to first order in the errors.

@@ -34,6 +34,16 @@ using PoseJacobian =
 ToolPose nominal_forward_jacobian(const Machine& m, const AxisVector& u,
                                   PoseJacobian& J_v_u, bool rotary_columns = true);
 
+/// Moves the linear axes of u so that the nominal tool tip is at tip_w_mm
+/// (workpiece coordinates), the rotary axes held: the tip is affine in the
+/// linear axes, so one 3 x 3 solve is exact. Returns the nominal pose at the
+/// new u and, when J_v_u is given, fills J_v_u at the new u, from the same
+/// walk over the chains (a linear joint translates what follows it and turns
+/// nothing). Throws std::invalid_argument unless the machine has three
+/// linear axes.
+ToolPose nominal_place_tip(const Machine& m, AxisVector& u, const Eigen::Vector3d& tip_w_mm,
+                           PoseJacobian* J_v_u = nullptr);
+
 /// J_v_u alone.
 PoseJacobian nominal_jacobian(const Machine& m, const AxisVector& u);
 

@@ -192,14 +192,8 @@ bool Kinematics::representative(int index, double q, double reference, double& o
 }
 
 AxisVector Kinematics::place_tip(const AxisVector& u, const Eigen::Vector3d& tip_w_mm) const {
-  PoseJacobian J;
-  const ToolPose v = nominal_forward_jacobian(machine_, u, J, /*rotary_columns=*/false);
-  Eigen::Matrix3d Jl;
-  for (int k = 0; k < 3; ++k) Jl.col(k) = J.block<3, 1>(0, linear_[static_cast<size_t>(k)]);
-  // The tip is affine in the linear axes: one Newton step is exact.
-  const Eigen::Vector3d dl = Jl.inverse() * (tip_w_mm - v.tip_mm);
   AxisVector out = u;
-  for (int k = 0; k < 3; ++k) out[linear_[static_cast<size_t>(k)]] += dl[k];
+  nominal_place_tip(machine_, out, tip_w_mm);
   return out;
 }
 
@@ -254,13 +248,14 @@ Kinematics::Rotary Kinematics::rotary_solutions(const ToolPose& v_w, const AxisV
 }
 
 AxisVector Kinematics::placed(const Rotary& r, int k, const AxisVector& previous,
-                              const Eigen::Vector3d& tip_w_mm) const {
+                              const Eigen::Vector3d& tip_w_mm, PoseJacobian* J_v_u) const {
   AxisVector u = previous;
   if (outer_ >= 0) {
     u[outer_] = r.q[static_cast<size_t>(k)][0];
     u[inner_] = r.q[static_cast<size_t>(k)][1];
   }
-  return place_tip(u, tip_w_mm);
+  nominal_place_tip(machine_, u, tip_w_mm, J_v_u);
+  return u;
 }
 
 BackwardSolutions Kinematics::backward(const ToolPose& v_w, const AxisVector& previous,
@@ -294,7 +289,7 @@ int Kinematics::select(const BackwardSolutions& s, const AxisVector& previous,
 }
 
 AxisVector Kinematics::backward_selected(const ToolPose& v_w, const AxisVector& previous,
-                                         bool* singular) const {
+                                         bool* singular, PoseJacobian* J_v_u) const {
   // The policy of select() with unit weights, placing the linear axes only
   // for the solutions it has to look at: the one with the least rotary
   // travel, and the other only when the first leaves the linear travel.
@@ -311,10 +306,14 @@ AxisVector Kinematics::backward_selected(const ToolPose& v_w, const AxisVector& 
     return d0 * d0 + d1 * d1;
   };
   const int first = r.count == 2 && dist(1) < dist(0) ? 1 : 0;
-  AxisVector u = placed(r, first, previous, v_w.tip_mm);
+  AxisVector u = placed(r, first, previous, v_w.tip_mm, J_v_u);
   if (r.count == 2 && !within_travel(machine_, u)) {
-    AxisVector other = placed(r, 1 - first, previous, v_w.tip_mm);
-    if (within_travel(machine_, other)) return other;
+    PoseJacobian J_other;
+    AxisVector other = placed(r, 1 - first, previous, v_w.tip_mm, J_v_u ? &J_other : nullptr);
+    if (within_travel(machine_, other)) {
+      if (J_v_u) *J_v_u = J_other;
+      return other;
+    }
   }
   return u;
 }

@@ -29,6 +29,7 @@
 
 #include <Eigen/Core>
 
+#include "core/jacobian.h"
 #include "core/machine.h"
 
 namespace volmap {
@@ -99,9 +100,11 @@ class Kinematics {
   /// The solution select() picks (unit weights), placing the linear axes
   /// only for the solutions the policy needs to look at (the real-time
   /// path). Throws std::invalid_argument when there is none. *singular (if
-  /// given) tells whether the outer axis was held.
+  /// given) tells whether the outer axis was held. *J_v_u (if given)
+  /// receives the nominal Jacobian at the returned position, from the walk
+  /// that placed the tip (what CorrectionSolver::correct needs next).
   AxisVector backward_selected(const ToolPose& v_w, const AxisVector& previous,
-                               bool* singular = nullptr) const;
+                               bool* singular = nullptr, PoseJacobian* J_v_u = nullptr) const;
 
   /// Linear axes for the tip with the rotary axes of u fixed (exact, as
   /// linear_axes_for_tip, without allocation).
@@ -121,7 +124,7 @@ class Kinematics {
   Rotary rotary_solutions(const ToolPose& v_w, const AxisVector& previous,
                           double singular_sin) const;
   AxisVector placed(const Rotary& r, int k, const AxisVector& previous,
-                    const Eigen::Vector3d& tip_w_mm) const;
+                    const Eigen::Vector3d& tip_w_mm, PoseJacobian* J_v_u = nullptr) const;
 
   Machine machine_;
   int outer_ = -1, inner_ = -1;

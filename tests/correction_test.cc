@@ -279,13 +279,44 @@ TEST(Correction, HotPathAllocatesNothing) {
   EXPECT_GT(before, 0);  // the counter sees the set-up above
   for (size_t k = 0; k < us.size(); ++k) {
     const BackwardSolutions s = kin.backward(vs[k], us[k]);
-    const AxisVector u = kin.backward_selected(vs[k], us[k]);
+    PoseJacobian J_placed;
+    const AxisVector u = kin.backward_selected(vs[k], us[k], nullptr, &J_placed);
     PoseJacobian J;
     nominal_forward_jacobian(m, u, J);
-    sink += s.u[0][0] + J(0, 0) + one.correct(u).du[0] + iter.correct(u).du[0];
+    sink += s.u[0][0] + J(0, 0) + one.correct(u).du[0] + iter.correct(u).du[0] +
+            one.correct(u, {}, J_placed).du[1];
   }
   EXPECT_EQ(g_allocations - before, 0);
   EXPECT_TRUE(std::isfinite(sink));
+}
+
+// The Jacobian backward_selected hands over (from the walk that placed the
+// tip, shifted by the linear moves) is the Jacobian at the position it
+// returns, and the correction from it is the correction from scratch. Both
+// sample five-axis machines: a table-table X'Y'ZA'C' and B-C table-table.
+TEST(Correction, JacobianFromPlacingTheTipIsTheJacobianThere) {
+  for (const char* name : {"lei-hsu-xyzac", "bc-table-table"}) {
+    SCOPED_TRACE(name);
+    const Machine m = load(name);
+    const ErrorModel model(m, random_location_errors(m, 1.0, 7));
+    const CorrectionSolver solver(model);
+    const Kinematics& kin = solver.kinematics();
+    std::mt19937 rng(49);
+    for (int t = 0; t < 200; ++t) {
+      const AxisVector u0 = random_pose(m, rng);
+      AxisVector prev = random_pose(m, rng);
+      for (int i = 0; i < m.axis_count(); ++i)
+        if (is_rotary(m.axis_order[static_cast<size_t>(i)])) prev[i] = u0[i] + 0.05;
+      PoseJacobian J_handed;
+      const AxisVector u = kin.backward_selected(nominal_forward(m, u0), prev, nullptr, &J_handed);
+      const PoseJacobian J_fresh = nominal_jacobian(m, u);
+      ASSERT_EQ(J_handed.cols(), J_fresh.cols());
+      EXPECT_LT((J_handed - J_fresh).cwiseAbs().maxCoeff(), 1e-9);
+      const AxisVector du_handed = solver.correct(u, {}, J_handed).du;
+      const AxisVector du_fresh = solver.correct(u).du;
+      EXPECT_LT((du_handed - du_fresh).cwiseAbs().maxCoeff(), 1e-12);
+    }
+  }
 }
 
 TEST(Correction, OptionsAreValidated) {
