@@ -188,11 +188,11 @@ std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) 
     const std::vector<double> plus = along_axis(t, home, j, du_channel(t, j), is_bidirectional(t, j) ? +1 : 0);
     notes += fmt::format(
         "  {}: points {}..{}{}, reference {} at {:g} mm, magnification {}; the correction at the "
-        "reference position, {:.3f} um, is not in the table (reference position / grid shift)\n",
+        "reference position, {} um, is not in the table (reference position / grid shift)\n",
         axis_char(g.axis), p.base, p.base + g.count - 1,
         p.minus.empty() ? std::string("") : fmt::format(" (negative direction {}..{})", p.base + g.count, p.base + 2 * g.count - 1),
         p.base + home[static_cast<size_t>(j)], g.node(home[static_cast<size_t>(j)]), magnification[static_cast<size_t>(j)],
-        plus[static_cast<size_t>(home[static_cast<size_t>(j)])] * 1e3);
+        fixed(plus[static_cast<size_t>(home[static_cast<size_t>(j)])] * 1e3, 3));
   }
   notes +=
       "\nfanuc_3d.csv (three-dimensional error compensation): the correction vector at every\n"

@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include "core/cli/commands.h"
-#include "core/errors_csv.h"
+#include "core/errors_import.h"
 #include "core/machine_json.h"
 #include "maps/output_file.h"
 #include "maps/table_builder.h"
@@ -66,7 +66,7 @@ std::string layer_name(const maps::VolumetricTable& t, int layer) {
 
 Runner register_map(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, spacing, output, interpolation = "linear",
+    std::string machine, errors, errors_format = "auto", spacing, output, interpolation = "linear",
         model = "independent";
     double tolerance_um = 0.0;
     int threads = 0;
@@ -78,7 +78,9 @@ Runner register_map(CLI::App& app) {
              "(binary table file, docs/maps.md)");
   sub->add_option("--machine", o->machine, "Machine definition (JSON, docs/machine-format.md)")
       ->required();
-  sub->add_option("--errors", o->errors, "Errors CSV (errors.md)")->required();
+  sub->add_option("--errors", o->errors, "Errors file: errors.md CSV, ISG CSV or Etalon exchange format")->required();
+  sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
+      ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
   CLI::Option* spacing = sub->add_option(
       "--spacing", o->spacing,
       "Grid spacing per axis SX,SY,SZ[,SA,SC] (mm, degrees); nodes on multiples of the spacing "
@@ -110,7 +112,8 @@ Runner register_map(CLI::App& app) {
     const Machine m = load_machine_json(o->machine);
     const Formulation f = o->model == "dependent" ? Formulation::kDependent
                                                   : Formulation::kIndependent;
-    const ErrorModel model(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
+    const ErrorModel model(m, load_errors(o->errors, parse_errors_format(o->errors_format)),
+                           ModelOptions{f, OutsidePolicy::kError});
     const maps::Interpolation method = maps::parse_interpolation(o->interpolation);
     const int threads = o->threads > 0 ? o->threads
                                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
