@@ -444,6 +444,30 @@ TEST(ExportFanuc, IncrementsResumToTheAbsoluteCorrectionWithinQuantization) {
   EXPECT_EQ(tape.param.at(3621)[1], 10);  // X uses points 0..9 (both directions)
 }
 
+TEST(ExportFanuc, ReferenceInsideTheTravelSumsOnBothSides) {
+  // Home at X = 100, Y = 50: points before the reference carry the
+  // increments that lead up to it, C(k) = -sum of the values of points
+  // k+1 .. reference.
+  ExportOptions o = with_errors();
+  o.home = {100.0, 50.0, 0.0};
+  const FanucTape tape = parse_fanuc(file_named(export_table(small_table(), "fanuc", o), "fanuc_pitch.txt").text);
+  const long first = tape.param.at(3621)[0], ref = tape.param.at(3620)[0], m = tape.param.at(3623)[0];
+  EXPECT_EQ(ref - first, 2);
+  // The home line is Y = 50, Z = 0 now.
+  const double c_ref = correction_mm(100, 50, 0, +1).x();
+  for (long p = first; p <= first + 4; ++p) {
+    long sum = 0;
+    if (p > ref)
+      for (long q = ref + 1; q <= p; ++q) sum += tape.pitch.at(static_cast<int>(q));
+    else
+      for (long q = p + 1; q <= ref; ++q) sum -= tape.pitch.at(static_cast<int>(q));
+    const double x = 50.0 * static_cast<double>(p - first);
+    EXPECT_NEAR(static_cast<double>(sum * m), (correction_mm(x, 50, 0, +1).x() - c_ref) * 1e3, 0.5 * static_cast<double>(m) + 1e-6)
+        << "point " << p;
+  }
+  EXPECT_EQ(tape.param.at(3620)[1] - tape.param.at(3621)[1], 1);  // Y reference at its middle node
+}
+
 TEST(ExportFanuc, LatticeHoldsTheCorrectionVectorsInDetectionUnits) {
   const std::string text = file_named(export_table(small_table(), "fanuc", with_errors()), "fanuc_3d.csv").text;
   std::istringstream in(text);
