@@ -2,10 +2,13 @@
 //
 //  * Nonlinear axis error compensation: one compensation-value table
 //    <K>.COM per input axis K (AXISPOS = the position of K, columns X Y Z =
-//    the compensation of that output axis as a function of K on the home
+//    the error of that output axis as a function of K on the home
 //    line), and the assignment table VOLMAP.CMA that enters <K>.COM in the
 //    column of K ("[axis of the .COM column] = F(axis of the .CMA column)").
-//    The own-axis column is the absolute correction; cross columns are
+//    Values are errors, as HEIDENHAIN's axis-error compensation takes them
+//    (MP720: "positive if the table travel is too long"; the nonlinear
+//    example plots the error): -du, the error along the output axis at the
+//    commanded position. The own-axis column is absolute; cross columns are
 //    relative to the home node so that the three tables add up to the
 //    home-line decomposition du(x,y,z) ~ du(home) + sum_K [du along K -
 //    du(home)] without counting the home value twice.
@@ -88,11 +91,13 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
   if (nonlinear) {
     notes +=
         "\nNonlinear axis error compensation (<K>.COM, VOLMAP.CMA):\n"
-        "  value = correction du (mm) of the column's axis as a function of the axis K of the\n"
-        "  table, on the home line: the amount added to the nominal position (about minus the\n"
-        "  error). Own-axis column absolute; cross columns relative to the home node, so that\n"
-        "  the tables add up. Bidirectional K: the own-axis column holds the positive direction,\n"
-        "  BACKLASH the value for the negative direction of traverse; cross columns the mean.\n";
+        "  value = error (mm) of the column's axis as a function of the axis K of the table, on\n"
+        "  the home line: minus the correction du, i.e. the error along that axis at the\n"
+        "  commanded position (positive: the axis travels too far), which the control\n"
+        "  compensates. Own-axis column absolute; cross columns relative to the home node, so\n"
+        "  that the tables add up. Bidirectional K: the own-axis column holds the positive\n"
+        "  direction, BACKLASH the value for the negative direction of traverse; cross columns\n"
+        "  the mean.\n";
     std::string cma_header = fmt::format("{:<6}", "NR");
     std::string cma_row = fmt::format("{:<6}", 0);
     for (int in = 0; in < 3; ++in) {
@@ -107,13 +112,17 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
       std::vector<std::vector<double>> col(3);
       for (int out = 0; out < 3; ++out) {
         col[static_cast<size_t>(out)] = along_axis(t, home, in, du_channel(t, out), out == in && bidir ? +1 : 0);
+        for (double& v : col[static_cast<size_t>(out)]) v = -v;  // error = -correction
         if (out != in) {
           const double at_home = col[static_cast<size_t>(out)][static_cast<size_t>(home[static_cast<size_t>(in)])];
           for (double& v : col[static_cast<size_t>(out)]) v -= at_home;
         }
       }
       std::vector<double> backlash;
-      if (bidir) backlash = along_axis(t, home, in, du_channel(t, in), -1);
+      if (bidir) {
+        backlash = along_axis(t, home, in, du_channel(t, in), -1);
+        for (double& v : backlash) v = -v;
+      }
       std::vector<std::string> columns = {"X", "Y", "Z"};
       for (int out = 0; out < 3; ++out) columns[static_cast<size_t>(out)] = std::string(1, axis_char(t.grid[static_cast<size_t>(out)].axis));
       if (bidir) columns.push_back("BACKLASH");
@@ -148,7 +157,10 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
         "  C1 C2 C3 = EXK EYK EZK (mm), C4 C5 C6 = EAK EBK ECK (degrees): the ISO 230-1 errors\n"
         "  (actual minus nominal, right-handed rotations of the moving component) of axis K at\n"
         "  the table's nodes of K, mean of both approach directions for a bidirectional axis.\n"
-        "  Enter them in the COMPTAB column of the kinematics description before MachAxis K.\n";
+        "  Enter them in the COMPTAB column of the kinematics description before MachAxis K\n"
+        "  (at most 100 COMPTAB entries including the MachAxis entries). The positioning error\n"
+        "  (C1 of a linear axis) is usually corrected in the axis column of <K>.COM instead:\n"
+        "  do not enter it twice.\n";
     for (int a = 0; a < t.axis_count(); ++a) {
       const GridAxis& g = t.grid[static_cast<size_t>(a)];
       const AxisErrors* e = errors.errors_of(g.axis);

@@ -304,8 +304,9 @@ std::vector<std::vector<std::string>> com_rows(const std::string& text, std::vec
 TEST(ExportHeidenhain, ComTablesAreTheCorrectionAlongEachAxis) {
   const std::vector<ExportFile> files = export_table(small_table(), "heidenhain", with_errors());
   std::vector<std::string> header;
-  // X.COM: X = F(X) absolute (positive direction; BACKLASH: negative),
-  // Y = F(X) and Z = F(X) relative to the home node.
+  // X.COM: the error (minus the correction) of X = F(X) absolute (positive
+  // direction; BACKLASH: negative), Y = F(X) and Z = F(X) relative to the
+  // home node.
   const auto rows = com_rows(file_named(files, "X.COM").text, &header);
   EXPECT_EQ(header, (std::vector<std::string>{"NR", "AXISPOS", "X", "Y", "Z", "BACKLASH"}));
   ASSERT_EQ(rows.size(), 5u);
@@ -318,17 +319,19 @@ TEST(ExportHeidenhain, ComTablesAreTheCorrectionAlongEachAxis) {
     const Eigen::Vector3d minus = correction_mm(x, 0, 0, -1);
     const Eigen::Vector3d mean = 0.5 * (plus + minus);
     const Eigen::Vector3d home_mean = 0.5 * (home + correction_mm(0, 0, 0, -1));
-    EXPECT_NEAR(std::stod(rows[k][2]), plus.x(), 0.51e-4);
-    EXPECT_NEAR(std::stod(rows[k][3]), mean.y() - home_mean.y(), 0.51e-4);
-    EXPECT_NEAR(std::stod(rows[k][4]), mean.z() - home_mean.z(), 0.51e-4);
-    EXPECT_NEAR(std::stod(rows[k][5]), minus.x(), 0.51e-4);
+    EXPECT_NEAR(std::stod(rows[k][2]), -plus.x(), 0.51e-4);
+    EXPECT_NEAR(std::stod(rows[k][3]), -(mean.y() - home_mean.y()), 0.51e-4);
+    EXPECT_NEAR(std::stod(rows[k][4]), -(mean.z() - home_mean.z()), 0.51e-4);
+    EXPECT_NEAR(std::stod(rows[k][5]), -minus.x(), 0.51e-4);
   }
   header.clear();
   const auto zrows = com_rows(file_named(files, "Z.COM").text, &header);
   EXPECT_EQ(header, (std::vector<std::string>{"NR", "AXISPOS", "X", "Y", "Z"}));  // Z is not bidirectional
   ASSERT_EQ(zrows.size(), 3u);
   const Eigen::Vector3d zplus = correction_mm(0, 0, 100, +1), zminus = correction_mm(0, 0, 100, -1);
-  EXPECT_NEAR(std::stod(zrows[2][4]), 0.5 * (zplus.z() + zminus.z()), 0.51e-4);
+  EXPECT_NEAR(std::stod(zrows[2][4]), -0.5 * (zplus.z() + zminus.z()), 0.51e-4);
+  // At the home line X.COM's own column is about EXX of the errors file (+).
+  EXPECT_NEAR(std::stod(rows[4][2]), x_error(Component::EX, 200, +1), 1e-5);
   // The assignment table enters each table in the column of its input axis.
   const std::string cma = file_named(files, "VOLMAP.CMA").text;
   EXPECT_EQ(cma.substr(0, 17), "BEGIN VOLMAP.CMA\n");
