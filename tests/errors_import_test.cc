@@ -9,6 +9,8 @@
 
 #include "core/errors_import.h"
 #include "core/input_error.h"
+#include "tests/support/cli_run.h"
+#include "tests/support/test_paths.h"
 
 namespace volmap {
 namespace {
@@ -108,6 +110,53 @@ TEST(ErrorsImport, BadInputNamesTheOriginalLine) {
   expect_error_at("[EXX]\nGridpoints = {\n0 0.0 1\n}\n", "3");
   // An open grid.
   expect_error_at("[EXX]\nGridpoints = {\n0 0.0\n", "3");
+}
+
+// The same errors written in the three formats (tests/data/errors/formats/).
+std::string formats_file(const std::string& name) {
+  return test::source_path("tests/data/errors/formats/" + name);
+}
+
+TEST(ErrorsImport, TheThreeFormatsOfTheSameErrorsAgree) {
+  const ErrorSet v = load_errors(formats_file("hsu-small.csv"));
+  const ErrorSet i = load_errors(formats_file("hsu-small.isg.csv"));
+  const ErrorSet e = load_errors(formats_file("hsu-small.etalon.txt"));
+  EXPECT_EQ(i.metadata.at("format"), "isg-csv");
+  EXPECT_EQ(e.metadata.at("format"), "etalon");
+  EXPECT_EQ(e.metadata.at("skipped"), "INFO");
+  for (AxisName a : {AxisName::X, AxisName::Y, AxisName::Z})
+    for (double q : {0.0, 37.5, 150.0, 199.0, 300.0}) {
+      const auto want = at(v, a, q);
+      for (const ErrorSet* other : {&i, &e}) {
+        const auto got = at(*other, a, q);
+        for (int c = 0; c < kComponentCount; ++c)
+          EXPECT_NEAR(got[static_cast<size_t>(c)], want[static_cast<size_t>(c)], 1e-15) << axis_char(a) << q << c;
+      }
+    }
+  for (const char* n : {"EC0X", "EB0Z", "EA0Z"}) {
+    EXPECT_NEAR(i.location_error(n), v.location_error(n), 1e-18) << n;
+    EXPECT_NEAR(e.location_error(n), v.location_error(n), 1e-18) << n;
+  }
+}
+
+TEST(ErrorsImport, PostWritesTheSameProgramFromEveryFormat) {
+  std::string reference;
+  for (const char* f : {"hsu-small.csv", "hsu-small.isg.csv", "hsu-small.etalon.txt"}) {
+    const test::CliResult r = test::run_volmap(
+        "post --machine " + test::source_path("samples/machines/hsu-3axis.json") + " --errors " + formats_file(f) +
+        " --work-offset 100,100,50 " + test::source_path("samples/programs/pocket.ngc") + " -o -");
+    ASSERT_EQ(r.status, 0) << f << ": " << r.err;
+    if (reference.empty()) reference = r.out;
+    EXPECT_EQ(r.out, reference) << f;
+  }
+  EXPECT_GT(reference.size(), 1000u);
+  // An explicit format that does not match is an error naming the file.
+  const test::CliResult r = test::run_volmap(
+      "post --machine " + test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
+      formats_file("hsu-small.etalon.txt") + " --errors-format volmap --work-offset 100,100,50 " +
+      test::source_path("samples/programs/pocket.ngc") + " -o -");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("hsu-small.etalon.txt"), std::string::npos) << r.err;
 }
 
 }  // namespace
