@@ -6,9 +6,12 @@
 // renames after every file is complete). A table that does not fit a
 // controller's limits is refused with ExportError (nothing written).
 //
-// One-dimensional controller tables (LinuxCNC, Siemens LEC / CEC) take the
-// table along one axis with the other axes at the grid nodes nearest the
-// machine's home position ("the home line"); see docs/exports.md.
+// One-dimensional controller tables (LinuxCNC, Siemens LEC / CEC,
+// HEIDENHAIN .COM, Fanuc pitch error compensation) take the table along one
+// axis with the other axes at the grid nodes nearest the machine's home
+// position ("the home line"); see docs/exports.md. isg-csv and HEIDENHAIN's
+// KinematicsComp tables carry the component errors themselves
+// (ExportOptions::errors).
 #pragma once
 
 #include <stdexcept>

@@ -48,7 +48,8 @@ Runner register_export(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_flag("--json", o->json, "Write the list of files as one JSON document to stdout");
   sub->footer(
-      "Example:\n  volmap export --table hsu.vmt --format linuxcnc -o hsu-linuxcnc/");
+      "Example:\n  volmap export --table hsu.vmt --format linuxcnc -o hsu-linuxcnc/\n"
+      "  volmap export --table hsu.vmt --format heidenhain --errors samples/errors/hsu-3axis.csv -o tnc/");
 
   return [o]() -> int {
     maps::refuse_output_equal_to_input(o->output, {o->table, o->machine, o->errors});

@@ -117,7 +117,9 @@ Runner register_map(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   sub->footer(
       "Example:\n  volmap map --machine samples/machines/hsu-3axis.json "
-      "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt");
+      "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt\n"
+      "  volmap map --machine samples/machines/hsu-3axis.json --errors laser.isg.csv --spacing 10,10,10 "
+      "--repeatability-um 0.5 --report map.html -o hsu.vmt");
 
   return [o]() -> int {
     maps::refuse_output_equal_to_input(o->output, {o->machine, o->errors});
