@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <charconv>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <iterator>
@@ -212,7 +213,7 @@ std::string etalon_to_errors_csv(const std::string& text, const std::string& fil
     if (s[0] == '[') {
       const size_t close = s.find(']');
       if (close == std::string::npos) throw InputError(file, n, "section name without ]");
-      section_raw = s.substr(1, close - 1);
+      section_raw = strip_comment(s.substr(1, close - 1));
       section = iso_name(section_raw);
       section_line = n;
       if (!section && skipped != nullptr) *skipped += (skipped->empty() ? "" : " ") + section_raw;
@@ -242,6 +243,8 @@ std::string etalon_to_errors_csv(const std::string& text, const std::string& fil
       if (section->location)
         throw InputError(file, n, section_raw + " is a position error: give it as VALUE = v");
       if (value.empty() || value[0] != '{') throw InputError(file, n, "Gridpoints = must be followed by {");
+      if (value.size() > 1)
+        throw InputError(file, n, "put the Gridpoints rows on the lines after \"Gridpoints = {\", one per line");
       out.line("", 0);
       out.line(fmt::format("{},{}", axis_char(section->axis), error_name_string(*section)), section_line);
       in_grid = true;
@@ -272,6 +275,18 @@ ErrorSet read_errors(std::istream& in, const std::string& file, ErrorsFormat for
   std::istringstream s(converted);
   try {
     ErrorSet set = read_errors_csv(s, file);
+    // Tables name their block "file:line" for later messages (outside the
+    // table): the line of the original file.
+    for (auto& axis : set.axis) {
+      if (!axis) continue;
+      for (AxisErrorTable* t : {&axis->plus, &axis->minus}) {
+        const std::string prefix = file + ":";
+        if (t->source.rfind(prefix, 0) != 0) continue;
+        const int line = std::atoi(t->source.c_str() + prefix.size());
+        if (line > 0 && static_cast<size_t>(line) <= line_of.size())
+          t->source = prefix + std::to_string(line_of[static_cast<size_t>(line - 1)]);
+      }
+    }
     set.metadata["format"] = errors_format_name(format);
     if (!skipped.empty()) set.metadata["skipped"] = skipped;
     return set;

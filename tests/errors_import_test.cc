@@ -81,6 +81,13 @@ TEST(ErrorsImport, EtalonVendorVariant) {
   EXPECT_EQ(e.metadata.at("skipped"), "MACHINE");
 }
 
+TEST(ErrorsImport, TablesNameTheOriginalLineInLaterMessages) {
+  const ErrorSet e = read("// c\n\n[EXX]\nGridpoints = {\n0 0\n100 0.001\n}\n");
+  EXPECT_EQ(e.errors_of(AxisName::X)->plus.source, "test.txt:3");
+  const ErrorSet i = read("// c\nX EXX\n0 0\n100 0.001\n");
+  EXPECT_EQ(i.errors_of(AxisName::X)->plus.source, "test.txt:2");
+}
+
 TEST(ErrorsImport, VolmapFilesAreDetectedAsVolmap) {
   EXPECT_EQ(detect_errors_format("# volmap component errors v1\nX,EXX\n0,1\n"), ErrorsFormat::kVolmap);
   EXPECT_EQ(detect_errors_format("X,EXX\n0,1\n"), ErrorsFormat::kVolmap);
