@@ -11,33 +11,6 @@ namespace volmap::maps::exporters {
 
 namespace {
 
-// "-0.000000" -> "0.000000": the same bytes whatever the rounding sign.
-std::string fixed(double v, int decimals = 6) {
-  std::string s = fmt::format("{:.{}f}", v, decimals);
-  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
-}
-
-int du_channel(const VolumetricTable& t, int axis) {
-  return *t.channel(std::string("u") + static_cast<char>('x' + axis));
-}
-
-bool is_bidirectional(const VolumetricTable& t, int axis) {
-  for (int a : t.bidirectional_axes)
-    if (a == axis) return true;
-  return false;
-}
-
-void require_uniform(const VolumetricTable& t, int axis, const std::string& format) {
-  const GridAxis& g = t.grid[static_cast<size_t>(axis)];
-  if (!g.uniform())
-    throw ExportError(fmt::format(
-        "--format {}: axis {}: the spacing {:g} does not divide the travel {:g}..{:g} (the last "
-        "cell is shorter), but the controller needs equidistant points; build the table with a "
-        "spacing that divides the travel",
-        format, axis_char(g.axis), g.spacing, g.start, g.end));
-}
-
 std::string provenance(const VolumetricTable& t, const char* comment) {
   return fmt::format("{} volmap export of machine {} (errors {})\n", comment, t.machine_name,
                      t.errors_source);

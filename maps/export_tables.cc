@@ -30,13 +30,6 @@ std::string layer_tag(const VolumetricTable& t, int layer) {
   return tag;
 }
 
-// Clean "-0.000000" to "0.000000" so files compare across platforms.
-std::string fixed(double v, int decimals) {
-  std::string s = fmt::format("{:.{}f}", v, decimals);
-  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
-}
-
 }  // namespace
 
 std::vector<ExportFile> csv(const VolumetricTable& t, const ExportOptions&) {

@@ -11,7 +11,8 @@
 namespace volmap::maps {
 
 const std::vector<std::string>& export_formats() {
-  static const std::vector<std::string> f = {"csv", "json", "linuxcnc", "siemens-lec", "siemens-cec"};
+  static const std::vector<std::string> f = {"csv",         "json",       "linuxcnc", "siemens-lec",
+                                               "siemens-cec", "heidenhain", "fanuc",    "isg-csv"};
   return f;
 }
 
@@ -22,11 +23,11 @@ std::vector<ExportFile> export_table(const VolumetricTable& table, const std::st
   if (format == "linuxcnc") return exporters::linuxcnc(table, options);
   if (format == "siemens-lec") return exporters::siemens_lec(table, options);
   if (format == "siemens-cec") return exporters::siemens_cec(table, options);
+  if (format == "heidenhain") return exporters::heidenhain(table, options);
+  if (format == "fanuc") return exporters::fanuc(table, options);
+  if (format == "isg-csv") return exporters::isg_csv(table, options);
   std::string known;
   for (const std::string& f : export_formats()) known += (known.empty() ? "" : ", ") + f;
-  if (format == "heidenhain" || format == "fanuc" || format == "isg-csv")
-    throw ExportError(fmt::format("--format {}: not implemented yet in this volmap; available: {}",
-                                  format, known));
   throw ExportError(fmt::format("--format {}: unknown format; expected one of {}", format, known));
 }
 
@@ -84,6 +85,43 @@ std::vector<double> along_axis(const VolumetricTable& t, const std::vector<std::
   }
   for (double& v : out) v /= used;
   return out;
+}
+
+const ErrorSet& require_errors(const ExportOptions& o, const std::string& format) {
+  if (o.errors == nullptr)
+    throw ExportError(fmt::format(
+        "--format {}: needs the component errors the table was built from; give them with "
+        "--errors E.csv (volmap, ISG CSV or Etalon format)",
+        format));
+  return *o.errors;
+}
+
+int du_channel(const VolumetricTable& t, int axis) {
+  return *t.channel(std::string("u") + static_cast<char>('x' + axis));
+}
+
+bool is_bidirectional(const VolumetricTable& t, int axis) {
+  for (int a : t.bidirectional_axes)
+    if (a == axis) return true;
+  return false;
+}
+
+std::string fixed(double v, int decimals) {
+  std::string s = fmt::format("{:.{}f}", v, decimals);
+  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+  return s;
+}
+
+double display_position(AxisName a, double v) { return is_rotary(a) ? v * 180.0 / M_PI : v; }
+
+void require_uniform(const VolumetricTable& t, int axis, const std::string& format) {
+  const GridAxis& g = t.grid[static_cast<size_t>(axis)];
+  if (!g.uniform())
+    throw ExportError(fmt::format(
+        "--format {}: axis {}: the spacing {:g} does not divide the travel {:g}..{:g} (the last "
+        "cell is shorter), but the controller needs equidistant points; build the table with a "
+        "spacing that divides the travel",
+        format, axis_char(g.axis), g.spacing, g.start, g.end));
 }
 
 void require_three_axis(const VolumetricTable& t, const std::string& format) {

@@ -148,6 +148,9 @@ void fill_table(const ErrorModel& model, VolumetricTable& table, const BuildOpti
       },
       options.progress);
 
+  if (options.repeatability && table.channel("u"))
+    fill_uncertainty(model, table, *options.repeatability, threads);
+
   if (summary != nullptr) {
     summary->seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -165,6 +168,7 @@ void fill_table(const ErrorModel& model, VolumetricTable& table, const BuildOpti
 VolumetricTable build_table(const ErrorModel& model, const std::vector<double>& spacing,
                             const BuildOptions& options, BuildSummary* summary) {
   VolumetricTable t = make_table_layout(model, spacing);
+  if (options.repeatability) add_uncertainty_channel(t);
   fill_table(model, t, options, summary);
   return t;
 }
@@ -298,11 +302,13 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
       spacing.push_back(std::min(s, L.max - L.min));
     }
     VolumetricTable layout = make_table_layout(model, spacing);
+    if (build.repeatability) add_uncertainty_channel(layout);
     if (layout.size_bytes() > max_bytes) break;
     AutoSpacingResult r;
     r.table = std::move(layout);
     BuildOptions quiet = build;
     quiet.progress = nullptr;  // the search builds many tables: no bar
+    quiet.repeatability.reset();  // filled for the chosen table only
     fill_table(model, r.table, quiet, &r.build);
     CheckOptions c = check;
     c.threads = build.threads;
@@ -316,6 +322,7 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
       r.table.tolerance_um = tolerance_um;
       r.table.achieved_um = r.check.max_um();
       r.table.checked_with = c.method;
+      if (build.repeatability) fill_uncertainty(model, r.table, *build.repeatability, build.threads);
       return r;
     }
   }

@@ -12,10 +12,12 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/error_model.h"
+#include "maps/node_uncertainty.h"
 #include "maps/volumetric_table.h"
 
 namespace volmap::maps {
@@ -25,6 +27,9 @@ struct BuildOptions {
   /// Called from the calling thread about 20 times a second with the rows
   /// done and the total, and once at the end; may be empty.
   std::function<void(std::int64_t done, std::int64_t total)> progress;
+  /// When set, the table gets the channel "u" (maps/node_uncertainty.h),
+  /// filled after the other channels.
+  std::optional<Repeatability> repeatability;
 };
 
 struct BuildSummary {

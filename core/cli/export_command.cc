@@ -2,12 +2,14 @@
 // a controller (docs/exports.md) into a folder.
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "core/cli/commands.h"
+#include "core/errors_import.h"
 #include "core/machine_json.h"
 #include "maps/exporters.h"
 #include "maps/output_file.h"
@@ -19,7 +21,8 @@ namespace {
 
 Runner register_export(CLI::App& app) {
   struct Opts {
-    std::string table, format, output, machine;
+    std::string table, format, output, machine, errors, errors_format = "auto";
+    double detection_unit_um = 1.0;
     bool json = false;
   };
   auto o = std::make_shared<Opts>();
@@ -34,12 +37,22 @@ Runner register_export(CLI::App& app) {
   sub->add_option("--machine", o->machine,
                   "Machine definition: its home position picks the line of one-dimensional "
                   "controller tables (default: each axis's travel start)");
+  sub->add_option("--errors", o->errors,
+                  "The errors the table was built from (errors.md CSV, ISG CSV or Etalon): needed by "
+                  "isg-csv and by the KinematicsComp tables of heidenhain");
+  sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
+      ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
+  sub->add_option("--detection-unit-um", o->detection_unit_um,
+                  "fanuc: detection unit of the axes, um (default 1); compensation values are "
+                  "integers in it")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--json", o->json, "Write the list of files as one JSON document to stdout");
   sub->footer(
-      "Example:\n  volmap export --table hsu.vmt --format linuxcnc -o hsu-linuxcnc/");
+      "Example:\n  volmap export --table hsu.vmt --format linuxcnc -o hsu-linuxcnc/\n"
+      "  volmap export --table hsu.vmt --format heidenhain --errors samples/errors/hsu-3axis.csv -o tnc/");
 
   return [o]() -> int {
-    maps::refuse_output_equal_to_input(o->output, {o->table, o->machine});
+    maps::refuse_output_equal_to_input(o->output, {o->table, o->machine, o->errors});
     const maps::VolumetricTable table = maps::load_table(o->table);
     maps::ExportOptions options;
     if (!o->machine.empty()) {
@@ -49,6 +62,12 @@ Runner register_export(CLI::App& app) {
                                                 o->machine, m.name, m.axis_count(), o->table,
                                                 table.axis_count()));
       for (int i = 0; i < m.axis_count(); ++i) options.home.push_back(m.home[i]);
+    }
+    options.detection_unit_mm = o->detection_unit_um * 1e-3;
+    std::optional<ErrorSet> errors;
+    if (!o->errors.empty()) {
+      errors = load_errors(o->errors, parse_errors_format(o->errors_format));
+      options.errors = &*errors;
     }
     std::vector<maps::ExportFile> files;
     try {

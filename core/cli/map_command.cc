@@ -5,6 +5,8 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <utility>
 #include <string>
 #include <thread>
 #include <vector>
@@ -14,8 +16,10 @@
 #include <unistd.h>
 
 #include "core/cli/commands.h"
-#include "core/errors_csv.h"
+#include "core/errors_import.h"
 #include "core/machine_json.h"
+#include "maps/map_report.h"
+#include "maps/node_uncertainty.h"
 #include "maps/output_file.h"
 #include "maps/table_builder.h"
 #include "maps/table_file.h"
@@ -66,9 +70,10 @@ std::string layer_name(const maps::VolumetricTable& t, int layer) {
 
 Runner register_map(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, spacing, output, interpolation = "linear",
+    std::string machine, errors, errors_format = "auto", spacing, output, interpolation = "linear",
         model = "independent";
-    double tolerance_um = 0.0;
+    std::string report;
+    double tolerance_um = 0.0, repeatability_um = -1.0, repeatability_urad = -1.0;
     int threads = 0;
     bool json = false;
   };
@@ -78,7 +83,9 @@ Runner register_map(CLI::App& app) {
              "(binary table file, docs/maps.md)");
   sub->add_option("--machine", o->machine, "Machine definition (JSON, docs/machine-format.md)")
       ->required();
-  sub->add_option("--errors", o->errors, "Errors CSV (errors.md)")->required();
+  sub->add_option("--errors", o->errors, "Errors file: errors.md CSV, ISG CSV or Etalon exchange format")->required();
+  sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
+      ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
   CLI::Option* spacing = sub->add_option(
       "--spacing", o->spacing,
       "Grid spacing per axis SX,SY,SZ[,SA,SC] (mm, degrees); nodes on multiples of the spacing "
@@ -98,25 +105,46 @@ Runner register_map(CLI::App& app) {
   sub->add_option("-o,--output", o->output, "Table file to write (- for standard output)")
       ->required();
   sub->add_flag("--json", o->json, "Write the summary as one JSON document to stdout");
+  sub->add_option("--report", o->report,
+                  "Also write a self-contained HTML page with slices of the error field (inline "
+                  "SVG, no network)");
+  sub->add_option("--repeatability-um", o->repeatability_um,
+                  "Standard uncertainty of every translational error of the errors file, um (default: "
+                  "its '# repeatability_um:' metadata); adds the per-node uncertainty u")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--repeatability-urad", o->repeatability_urad,
+                  "Standard uncertainty of every angular error, urad (default: '# repeatability_urad:')")
+      ->check(CLI::NonNegativeNumber);
   sub->footer(
       "Example:\n  volmap map --machine samples/machines/hsu-3axis.json "
-      "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt");
+      "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt\n"
+      "  volmap map --machine samples/machines/hsu-3axis.json --errors laser.isg.csv --spacing 10,10,10 "
+      "--repeatability-um 0.5 --report map.html -o hsu.vmt");
 
   return [o]() -> int {
     maps::refuse_output_equal_to_input(o->output, {o->machine, o->errors});
+    if (!o->report.empty()) maps::refuse_output_equal_to_input(o->report, {o->machine, o->errors, o->output});
     if (o->output == "-" && !o->json && isatty(1))
       throw std::invalid_argument("-o -: refusing to write a binary table to a terminal; "
                                   "redirect standard output or give a file");
     const Machine m = load_machine_json(o->machine);
     const Formulation f = o->model == "dependent" ? Formulation::kDependent
                                                   : Formulation::kIndependent;
-    const ErrorModel model(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
+    ErrorSet errors = load_errors(o->errors, parse_errors_format(o->errors_format));
+    std::optional<maps::Repeatability> repeatability = maps::repeatability_from(errors);
+    if (o->repeatability_um >= 0.0 || o->repeatability_urad >= 0.0) {
+      if (!repeatability) repeatability.emplace();
+      if (o->repeatability_um >= 0.0) repeatability->translational_mm = o->repeatability_um * 1e-3;
+      if (o->repeatability_urad >= 0.0) repeatability->angular_rad = o->repeatability_urad * 1e-6;
+    }
+    const ErrorModel model(m, std::move(errors), ModelOptions{f, OutsidePolicy::kError});
     const maps::Interpolation method = maps::parse_interpolation(o->interpolation);
     const int threads = o->threads > 0 ? o->threads
                                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 
     maps::BuildOptions build;
     build.threads = threads;
+    build.repeatability = repeatability;
     const bool bar = isatty(2) != 0;
     if (bar) {
       build.progress = [](std::int64_t done, std::int64_t total) {
@@ -157,13 +185,26 @@ Runner register_map(CLI::App& app) {
       maps::save_table(o->output, table);
     }
 
-    // Largest |dv| and |du| over the nodes (um).
-    double max_dv = 0.0, max_du = 0.0;
+    if (!o->report.empty()) {
+      maps::ReportInfo info;
+      info.model = o->model;
+      info.max_interpolation_um = checked.max_um();
+      info.interpolation = maps::interpolation_name(method);
+      info.build_seconds = summary.seconds;
+      maps::OutputFile page(o->report);
+      page.stream() << maps::map_report_html(table, info);
+      page.commit();
+    }
+
+    // Largest |dv|, |du| and u over the nodes (um).
+    double max_dv = 0.0, max_du = 0.0, max_u = 0.0;
     const std::optional<int> ux = table.channel("ux");
+    const std::optional<int> uc = table.channel("u");
     for (int layer = 0; layer < table.layer_count(); ++layer)
       for (std::int64_t n = 0; n < table.node_count(); ++n) {
         const double* v = table.at(layer, n);
         max_dv = std::max(max_dv, std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * 1e3);
+        if (uc) max_u = std::max(max_u, v[*uc] * 1e3);
         if (ux) {
           const double* d = v + *ux;
           max_du = std::max(max_du, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * 1e3);
@@ -195,6 +236,8 @@ Runner register_map(CLI::App& app) {
       doc["bytes"] = table.size_bytes();
       doc["max_dv_um"] = max_dv;
       if (ux) doc["max_du_um"] = max_du;
+      if (uc) doc["max_u_um"] = max_u;
+      if (!o->report.empty()) doc["report"] = o->report;
       doc["interpolation"] = maps::interpolation_name(method);
       if (table.tolerance_um > 0.0) doc["tolerance_um"] = table.tolerance_um;
       doc["max_interpolation_error_um"] = checked.max_um();
@@ -224,6 +267,7 @@ Runner register_map(CLI::App& app) {
                              static_cast<double>(table.size_bytes()) / (1 << 20));
     std::cout << fmt::format("  max |dv| {:.3f} um", max_dv);
     if (ux) std::cout << fmt::format(", max |du| {:.3f} um", max_du);
+    if (uc) std::cout << fmt::format(", max uncertainty u {:.3f} um", max_u);
     std::cout << "\n";
     std::cout << fmt::format(
         "  interpolation error ({}) max {:.4f} um{} over {} cell centres and random points per layer\n",
@@ -236,6 +280,7 @@ Runner register_map(CLI::App& app) {
                                summary.correction_clamped);
     std::cout << fmt::format("  built in {:.3f} s on {} thread{}; written {}\n", summary.seconds,
                              threads, threads > 1 ? "s" : "", o->output);
+    if (!o->report.empty()) std::cout << fmt::format("  report {}\n", o->report);
     return 0;
   };
 }

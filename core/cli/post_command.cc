@@ -10,6 +10,7 @@
 #include "core/cli/commands.h"
 #include "core/cli/program_setup.h"
 #include "core/errors_csv.h"
+#include "core/errors_import.h"
 #include "core/input_error.h"
 #include "core/machine_json.h"
 #include "postproc/post_program.h"
@@ -19,7 +20,7 @@ namespace {
 
 Runner register_post(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, table, in, out;
+    std::string machine, errors, errors_format = "auto", table, in, out;
     ProgramSetupOptions placement;
     double tolerance_um = 1.0;
     int decimals = -1;
@@ -28,7 +29,9 @@ Runner register_post(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand("post", "Rewrite an NC program for the real machine (correction of every point, segmented within tolerance)");
   sub->add_option("--machine", o->machine, "Machine definition (JSON)")->required();
-  auto* errors = sub->add_option("--errors", o->errors, "Errors CSV (errors.md)");
+  auto* errors = sub->add_option("--errors", o->errors, "Errors file: errors.md CSV, ISG CSV or Etalon exchange format");
+  sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
+      ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
   auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map); not yet supported by post");
   errors->excludes(table);
   sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)");
@@ -43,7 +46,7 @@ Runner register_post(CLI::App& app) {
     if (o->errors.empty())
       throw std::invalid_argument("post needs --errors (table input is not supported yet)");
     const Machine m = load_machine_json(o->machine);
-    const ErrorSet e = load_errors_csv(o->errors);
+    const ErrorSet e = load_errors(o->errors, parse_errors_format(o->errors_format));
     const nc::ProgramSetup setup = o->placement.load(m);
     post::PostOptions opt;
     opt.tolerance_mm = o->tolerance_um * 1e-3;

@@ -9,6 +9,7 @@
 #include "core/cli/commands.h"
 #include "core/cli/program_setup.h"
 #include "core/errors_csv.h"
+#include "core/errors_import.h"
 #include "core/input_error.h"
 #include "core/machine_json.h"
 #include "postproc/verify.h"
@@ -18,7 +19,7 @@ namespace {
 
 Runner register_verify(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, nominal, program;
+    std::string machine, errors, errors_format = "auto", nominal, program;
     ProgramSetupOptions placement;
     double step_mm = 0.25;
     bool json = false, clamp = false;
@@ -26,7 +27,9 @@ Runner register_verify(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand("verify", "Run a nominal program (uncompensated) and its compensated version on the simulated real machine; report the deviation of the actual tool path");
   sub->add_option("--machine", o->machine, "Machine definition (JSON)")->required();
-  sub->add_option("--errors", o->errors, "Errors CSV (errors.md)")->required();
+  sub->add_option("--errors", o->errors, "Errors file: errors.md CSV, ISG CSV or Etalon exchange format")->required();
+  sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
+      ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
   sub->add_option("--nominal", o->nominal, "The program as written for the ideal machine")->required();
   sub->add_option("--program", o->program, "The compensated program (volmap post)")->required();
   o->placement.add_to(*sub);
@@ -37,7 +40,7 @@ Runner register_verify(CLI::App& app) {
               "      --work-offset 100,100,50 --nominal part.ngc --program part-compensated.ngc --json");
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
-    const ErrorSet e = load_errors_csv(o->errors);
+    const ErrorSet e = load_errors(o->errors, parse_errors_format(o->errors_format));
     const nc::ProgramSetup setup = o->placement.load(m);
     std::ifstream a(o->nominal, std::ios::binary), b(o->program, std::ios::binary);
     if (!a) throw InputError(o->nominal, 0, "cannot open the nominal program; check the path");
