@@ -1,0 +1,83 @@
+#include "postproc/five_axis_transform.h"
+
+#include <cmath>
+#include <cstdint>
+
+#include <fmt/format.h>
+
+namespace volmap::post {
+
+bool error_set_empty(const ErrorSet& errors) {
+  bool any = !errors.location.empty();
+  for (const auto& a : errors.axis) any = any || a.has_value();
+  return !any;
+}
+
+FiveAxisTransform::FiveAxisTransform(const Machine& machine, const ErrorSet& errors,
+                                     OutsidePolicy outside, CorrectionOptions correction)
+    : kin_(machine), zero_(error_set_empty(errors)) {
+  if (!kin_.has_rotary_axes())
+    throw std::invalid_argument("the five-axis post needs a machine with two rotary axes");
+  if (!zero_) {
+    ModelOptions mo;
+    mo.outside = outside;
+    model_ = std::make_unique<ErrorModel>(machine, errors, mo);
+    solver_ = std::make_unique<CorrectionSolver>(*model_, correction);
+  }
+}
+
+AxisVector FiveAxisTransform::command(const AxisVector& u_nominal, bool* singular) const {
+  if (zero_) {
+    if (singular) *singular = false;
+    return u_nominal;
+  }
+  const CorrectionResult r = solver_->correct(u_nominal);
+  if (singular) *singular = r.singular;
+  return u_nominal + r.du;
+}
+
+ToolPose FiveAxisTransform::actual(const AxisVector& u) const {
+  if (zero_) return nominal_forward(kin_.machine(), u);
+  return model_->actual(u);
+}
+
+void append_number(std::string& out, double value, int decimals) {
+  static constexpr double kPow10[] = {1, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
+  if (decimals < 0 || decimals > 9 || !std::isfinite(value) ||
+      std::abs(value) * kPow10[decimals] > 9e15) {
+    std::string s = fmt::format("{:.{}f}", value, decimals < 0 ? 0 : decimals);
+    if (s.find('.') != std::string::npos) {
+      while (s.back() == '0') s.pop_back();
+      if (s.back() == '.') s.pop_back();
+    }
+    if (s == "-0") s = "0";
+    out += s;
+    return;
+  }
+  const double scaled = std::nearbyint(value * kPow10[decimals]);
+  std::int64_t n = static_cast<std::int64_t>(scaled);
+  if (n == 0) {
+    out += '0';
+    return;
+  }
+  if (n < 0) {
+    out += '-';
+    n = -n;
+  }
+  // Drop trailing zeros of the fraction.
+  int d = decimals;
+  while (d > 0 && n % 10 == 0) {
+    n /= 10;
+    --d;
+  }
+  char buf[24];
+  int len = 0;
+  while (n > 0 || len <= d) {
+    if (len == d && d > 0) buf[len++] = '.';
+    buf[len++] = static_cast<char>('0' + n % 10);
+    n /= 10;
+  }
+  for (int i = len - 1; i >= 0; --i) out += buf[i];
+}
+
+}  // namespace volmap::post
