@@ -17,6 +17,15 @@ namespace {
 
 using Eigen::Vector3d;
 
+// apply_edit, without the trailing blanks that removed words can leave.
+std::string edited(const nc::Block& b, const nc::BlockEdit& e) {
+  std::string t = nc::apply_edit(b, e);
+  const bool blank_end = !b.text.empty() && (b.text.back() == ' ' || b.text.back() == '\t');
+  if (!blank_end)
+    while (!t.empty() && (t.back() == ' ' || t.back() == '\t')) t.pop_back();
+  return t;
+}
+
 constexpr double kRadToDeg = 180.0 / M_PI;
 
 double angle_between(const Vector3d& a, const Vector3d& b) {
@@ -111,6 +120,7 @@ class FiveAxisPost {
   bool started_ = false;
   AxisVector u_nom_;  ///< nominal axes at the end of the last move
   AxisVector c_;      ///< commanded axes at the end of the last move
+  double residual_angle_ = 0.0;  ///< tool-axis error left there (rad)
   int out_motion_ = -1;     ///< modal motion of the output (x10), -1 unknown
   int out_feed_mode_ = 940; ///< modal feed mode of the output
   std::vector<Piece> pieces_;
@@ -122,12 +132,15 @@ void FiveAxisPost::start_if_needed(const FiveAxisMove& m) {
   const NominalAt n = nominal_at(m, 0.0, u_nom_);
   u_nom_ = n.u;
   c_ = tf_.command(n.u);
+  residual_angle_ = tf_.zero() ? 0.0 : angle_between(tf_.actual(c_).axis, n.v.axis);
   started_ = true;
 }
 
 void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
   pieces.clear();
-  const double tol = o_.tolerance_mm, atol = o_.angle_tolerance_rad;
+  // The checks aim at 3/4 of the tolerances: the rest is for the rounding of
+  // the written numbers and for the deviation between the checked points.
+  const double tol = 0.75 * o_.tolerance_mm, atol = 0.75 * o_.angle_tolerance_rad;
   int n0 = 1;
   if (m.tip.kind == nc::MotionKind::kArc) {
     const nc::ArcGeometry g = nc::arc_geometry(m.tip);
@@ -148,6 +161,11 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
       stack.pop_back();
       const NominalAt n1 = nominal_at(m, s1, u_nom_);
       const AxisVector c1 = command(n1.u);
+      // What the correction leaves of the tool-axis error at the ends (the
+      // singular position: the part only the outer axis could turn) is
+      // allowed between them too.
+      const double r1 = tf_.zero() ? 0.0 : angle_between(tf_.actual(c1).axis, n1.v.axis);
+      const double allowed_angle = atol + std::max(residual_angle_, r1);
       bool ok = true;
       for (int k2 = 0; k2 < mach.axis_count() && ok; ++k2)
         if (is_rotary(mach.axis_order[static_cast<size_t>(k2)]) && std::abs(c1[k2] - c_[k2]) >= M_PI / 2)
@@ -160,7 +178,8 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
         const Vector3d q_nom = m.by_angles ? tf_.nominal(tf_.axes_for_angles(m.q0 + s * (m.q1 - m.q0),
                                                                              nc::point_on(m.tip, s))).axis
                                            : slerp_axis(m.a0, m.a1, s);
-        if (nc::distance_to_path(m.tip, a.tip_mm) > tol || angle_between(a.axis, q_nom) > atol) ok = false;
+        if (nc::distance_to_path(m.tip, a.tip_mm) > tol || angle_between(a.axis, q_nom) > allowed_angle)
+          ok = false;
       }
       if (ok || s1 - s0 < 1e-7) {
         if (n1.singular) ++report_.singular_poses;
@@ -170,9 +189,10 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
         pieces.push_back({c1, s1});
         if (pieces.size() > kMaxPieces)
           fail(fmt::format("more than {} pieces needed to keep {:g} um and {:g} urad; raise the tolerances",
-                           kMaxPieces, tol * 1e3, atol * 1e6));
+                           kMaxPieces, o_.tolerance_mm * 1e3, o_.angle_tolerance_rad * 1e6));
         c_ = c1;
         u_nom_ = n1.u;
+        residual_angle_ = r1;
         s_prev = s1;
         if (!stack.empty()) {
           const double end = stack.front().second;
@@ -269,7 +289,7 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
       return;
     }
     ++report_.lines_changed;
-    const std::string text = nc::apply_edit(l.block, edit);
+    const std::string text = edited(l.block, edit);
     if (text.find_first_not_of(" \t") == std::string::npos) return;  // only G93/G94: moved
     emit(text, reader_newline_);
     return;
@@ -285,6 +305,7 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
     pieces_.assign(1, Piece{command(n.u), 1.0});
     c_ = pieces_[0].c;
     u_nom_ = n.u;
+    residual_angle_ = tf_.zero() ? 0.0 : angle_between(tf_.actual(c_).axis, n.v.axis);
   } else {
     segment(m, pieces_);
   }
@@ -322,7 +343,7 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
     if (!l.strip.empty()) edit.insert += " (volmap post: LinuxCNC kinematics switch removed)";
     // The motion word was removed: the output's modal state before this
     // line is what move_text assumed.
-    emit(nc::apply_edit(l.block, edit), newline);
+    emit(edited(l.block, edit), newline);
   }
 }
 

@@ -26,6 +26,16 @@ FiveAxisTransform::FiveAxisTransform(const Machine& machine, const ErrorSet& err
   }
 }
 
+AxisVector FiveAxisTransform::axes_for_pose(const ToolPose& v_w, const AxisVector& previous,
+                                            bool* singular) const {
+  const Eigen::Vector3d& w1 = kin_.outer_axis_w();
+  if (v_w.axis.cross(w1).norm() > kSingularSin) return kin_.backward_selected(v_w, previous, singular);
+  // Within kSingularSin of the outer axis: the axis itself (an orientation
+  // change below 1e-7 rad), so that the outer angle is held.
+  const ToolPose snapped{v_w.tip_mm, v_w.axis.dot(w1) >= 0 ? Eigen::Vector3d(w1) : Eigen::Vector3d(-w1)};
+  return kin_.backward_selected(snapped, previous, singular);
+}
+
 AxisVector FiveAxisTransform::command(const AxisVector& u_nominal, bool* singular) const {
   if (zero_) {
     if (singular) *singular = false;

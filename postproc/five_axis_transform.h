@@ -38,10 +38,15 @@ class FiveAxisTransform {
   /// Kinematics::backward_selected: the solution within travel with the
   /// least rotary motion, unlimited axes unwrapped next to previous, the
   /// outer axis held at the singular position). *singular as there.
+  /// Near the singular position (|Q x w_outer| <= kSingularSin) the outer
+  /// axis is held too: Kinematics::backward_selected holds it only below
+  /// 1e-10, where its subproblem-2 formula has already lost the angle (for
+  /// |Q x w_outer| below about 1.5e-8, 1 - cos^2 underflows and the outer
+  /// angle comes out 0, neither held nor the azimuth). There the pose's
+  /// axis is taken as the outer axis itself (a change below 1e-7 rad).
   AxisVector axes_for_pose(const ToolPose& v_w, const AxisVector& previous,
-                           bool* singular = nullptr) const {
-    return kin_.backward_selected(v_w, previous, singular);
-  }
+                           bool* singular = nullptr) const;
+  static constexpr double kSingularSin = 1e-7;
   /// Nominal axes for the tip with the rotary angles of `q` (TCP programs:
   /// the program chose the rotary solution): the exact linear placement.
   AxisVector axes_for_angles(const AxisVector& q, const Eigen::Vector3d& tip_w_mm) const {

@@ -1,6 +1,7 @@
 #include "postproc/five_axis_verify.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -68,38 +69,43 @@ class Verifier {
     return nominal_tf_.nominal(q).axis;
   }
 
-  // Parameter of the point of the move's tip path nearest p.
-  static double nearest_parameter(const nc::Motion& t, const Vector3d& p) {
-    if (t.kind == nc::MotionKind::kArc) {
-      const nc::ArcGeometry g = nc::arc_geometry(t);
-      const double ang = std::atan2(p[g.a1] - t.center_mm[g.a1], p[g.a0] - t.center_mm[g.a0]);
-      double d = ang - g.start_angle;
-      if (g.sweep >= 0) {
-        while (d < 0) d += 2 * M_PI;
-      } else {
-        while (d > 0) d -= 2 * M_PI;
+  // Smallest angle between `axis` and the nominal tool axis along the move
+  // (17 samples, then golden-section refinement around the best).
+  double min_angle(const FiveAxisMove& m, const Vector3d& axis) const {
+    auto f = [&](double s) { return angle_between(axis, axis_at(m, s)); };
+    int best = 0;
+    double best_v = f(0.0);
+    for (int i = 1; i <= 16; ++i) {
+      const double v = f(i / 16.0);
+      if (v < best_v) {
+        best_v = v;
+        best = i;
       }
-      if (std::abs(g.sweep) < 1e-12) return 0.0;
-      return std::clamp(d / g.sweep, 0.0, 1.0);
     }
-    const Vector3d ab = t.end_mm - t.start_mm;
-    const double L2 = ab.squaredNorm();
-    if (L2 < 1e-18) return -1.0;  // no tip motion
-    return std::clamp((p - t.start_mm).dot(ab) / L2, 0.0, 1.0);
+    double lo = std::max(0, best - 1) / 16.0, hi = std::min(16, best + 1) / 16.0;
+    const double g = (std::sqrt(5.0) - 1) / 2;
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
+    for (int it = 0; it < 30; ++it) {
+      if (f1 < f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = hi - g * (hi - lo);
+        f1 = f(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = lo + g * (hi - lo);
+        f2 = f(x2);
+      }
+    }
+    return std::min({best_v, f1, f2});
   }
 
-  // Deviation of actual pose a from nominal move k: (mm, rad).
+  // Deviation of actual pose a from nominal move n: (mm, rad).
   std::pair<double, double> deviation(const NominalMove& n, const ToolPose& a) const {
-    const double d = nc::distance_to_path(n.m.tip, a.tip_mm);
-    double s = nearest_parameter(n.m.tip, a.tip_mm);
-    double ang;
-    if (s >= 0) {
-      ang = angle_between(a.axis, axis_at(n.m, s));
-    } else {
-      ang = M_PI;
-      for (int i = 0; i <= 32; ++i) ang = std::min(ang, angle_between(a.axis, axis_at(n.m, i / 32.0)));
-    }
-    return {d, ang};
+    return {nc::distance_to_path(n.m.tip, a.tip_mm), min_angle(n.m, a.axis)};
   }
 
   int samples_for(double tip_mm, double rot_rad) const {
@@ -194,17 +200,28 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
           const AxisVector u = u_prev + (static_cast<double>(i) / count) * (u1 - u_prev);
           const ToolPose a = v.tf_.actual(u);
           // Nearest nominal feed move around the cursor.
+          // Among the moves as near as the nearest (within 5 um: moves
+          // that meet or retrace each other), the one whose axis is nearest.
           const size_t lo = cursor >= 2 ? cursor - 2 : 0, hi = std::min(moves.size(), cursor + 12);
-          double best = 1e300, best_ang = 0;
+          double best = 1e300;
           size_t best_k = cursor;
+          std::array<double, 14> dist{};
           for (size_t k = lo; k < hi; ++k) {
-            const double d = nc::distance_to_path(moves[k].m.tip, a.tip_mm);
-            if (d < best - 1e-12) {
-              best = d;
+            dist[k - lo] = nc::distance_to_path(moves[k].m.tip, a.tip_mm);
+            if (dist[k - lo] < best - 1e-12) {
+              best = dist[k - lo];
               best_k = k;
             }
           }
-          best_ang = v.deviation(moves[best_k], a).second;
+          double best_ang = 1e300;
+          for (size_t k = lo; k < hi; ++k) {
+            if (dist[k - lo] > best + 0.005) continue;
+            const double ang = v.min_angle(moves[k].m, a.axis);
+            if (ang < best_ang) {
+              best_ang = ang;
+              if (k >= best_k) best_k = k;
+            }
+          }
           cursor = best_k;
           acc.add(best, best_ang, l.line);
         }
