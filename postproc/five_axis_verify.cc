@@ -200,28 +200,26 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
           const AxisVector u = u_prev + (static_cast<double>(i) / count) * (u1 - u_prev);
           const ToolPose a = v.tf_.actual(u);
           // Nearest nominal feed move around the cursor.
-          // Among the moves as near as the nearest (within 5 um: moves
-          // that meet or retrace each other), the one whose axis is nearest.
+          // The deviation: the distance to the nearest move of the window
+          // and, among the moves as near (within 5 um: moves that meet or
+          // retrace each other), the smallest axis angle. The cursor moves
+          // to the first of them from the cursor on (a path that comes back
+          // over itself must not pull it ahead).
           const size_t lo = cursor >= 2 ? cursor - 2 : 0, hi = std::min(moves.size(), cursor + 12);
           double best = 1e300;
-          size_t best_k = cursor;
           std::array<double, 14> dist{};
           for (size_t k = lo; k < hi; ++k) {
             dist[k - lo] = nc::distance_to_path(moves[k].m.tip, a.tip_mm);
-            if (dist[k - lo] < best - 1e-12) {
-              best = dist[k - lo];
-              best_k = k;
-            }
+            best = std::min(best, dist[k - lo]);
           }
           double best_ang = 1e300;
+          size_t best_k = hi;
           for (size_t k = lo; k < hi; ++k) {
             if (dist[k - lo] > best + 0.005) continue;
-            const double ang = v.min_angle(moves[k].m, a.axis);
-            if (ang < best_ang) {
-              best_ang = ang;
-              if (k >= best_k) best_k = k;
-            }
+            best_ang = std::min(best_ang, v.min_angle(moves[k].m, a.axis));
+            if (best_k == hi && k >= cursor) best_k = k;
           }
+          if (best_k == hi) best_k = cursor;
           cursor = best_k;
           acc.add(best, best_ang, l.line);
         }
