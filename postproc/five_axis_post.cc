@@ -75,8 +75,13 @@ class FiveAxisPost {
     return n;
   }
   AxisVector command(const AxisVector& u_nom) {
-    const AxisVector c = tf_.command(u_nom);
     const Machine& m = tf_.machine();
+    try {
+      check_within_travel(m, u_nom);
+    } catch (const std::invalid_argument& e) {
+      fail(std::string(e.what()) + "; place the part elsewhere on the table (--part-origin)");
+    }
+    const AxisVector c = tf_.command(u_nom);
     double lin = 0, rot = 0;
     for (int k = 0; k < m.axis_count(); ++k) {
       const double d = c[k] - u_nom[k];
