@@ -70,24 +70,28 @@ void append_number(std::string& out, double value, int decimals) {
     out += '0';
     return;
   }
-  if (n < 0) {
-    out += '-';
-    n = -n;
-  }
+  char buf[24];
+  char* end = buf + sizeof buf;
+  char* p = end;
+  const bool negative = n < 0;
+  if (negative) n = -n;
   // Drop trailing zeros of the fraction.
   int d = decimals;
   while (d > 0 && n % 10 == 0) {
     n /= 10;
     --d;
   }
-  char buf[24];
-  int len = 0;
-  while (n > 0 || len <= d) {
-    if (len == d && d > 0) buf[len++] = '.';
-    buf[len++] = static_cast<char>('0' + n % 10);
+  for (int k = 0; k < d; ++k) {
+    *--p = static_cast<char>('0' + n % 10);
     n /= 10;
   }
-  for (int i = len - 1; i >= 0; --i) out += buf[i];
+  if (d > 0) *--p = '.';
+  do {
+    *--p = static_cast<char>('0' + n % 10);
+    n /= 10;
+  } while (n > 0);
+  if (negative) *--p = '-';
+  out.append(p, static_cast<size_t>(end - p));
 }
 
 }  // namespace volmap::post
