@@ -16,6 +16,7 @@ namespace {
 using Eigen::Vector3d;
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr size_t kWindow = 24;  ///< nominal moves searched ahead of the cursor
 
 double angle_between(const Vector3d& a, const Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
@@ -201,25 +202,30 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
           const ToolPose a = v.tf_.actual(u);
           // Nearest nominal feed move around the cursor.
           // The deviation: the distance to the nearest move of the window
-          // and, among the moves as near (within 5 um: moves that meet or
-          // retrace each other), the smallest axis angle. The cursor moves
-          // to the first of them from the cursor on (a path that comes back
-          // over itself must not pull it ahead).
-          const size_t lo = cursor >= 2 ? cursor - 2 : 0, hi = std::min(moves.size(), cursor + 12);
+          // and the smallest axis angle among the moves about as near (within
+          // twice that plus 5 um: moves that meet or retrace each other) and
+          // the cursor's move and its neighbours. The cursor moves
+          // to the first move from the cursor on that is within 0.1 mm of
+          // the nearest: where a path crosses or retraces itself, an
+          // uncompensated sample tens of um off its own move can be nearer
+          // to a later one, which must not pull the cursor ahead.
+          const size_t lo = cursor >= 2 ? cursor - 2 : 0, hi = std::min(moves.size(), cursor + kWindow);
           double best = 1e300;
-          std::array<double, 14> dist{};
+          std::array<double, kWindow + 2> dist{};
           for (size_t k = lo; k < hi; ++k) {
             dist[k - lo] = nc::distance_to_path(moves[k].m.tip, a.tip_mm);
             best = std::min(best, dist[k - lo]);
           }
-          double best_ang = 1e300;
           size_t best_k = hi;
-          for (size_t k = lo; k < hi; ++k) {
-            if (dist[k - lo] > best + 0.005) continue;
-            best_ang = std::min(best_ang, v.min_angle(moves[k].m, a.axis));
-            if (best_k == hi && k >= cursor) best_k = k;
-          }
+          for (size_t k = cursor; k < hi && best_k == hi; ++k)
+            if (dist[k - lo] <= best + 0.1) best_k = k;
           if (best_k == hi) best_k = cursor;
+          double best_ang = 1e300;
+          for (size_t k = lo; k < hi; ++k) {
+            const bool near_cursor = k + 1 >= best_k && k <= best_k + 1;
+            if (near_cursor || dist[k - lo] <= 2 * best + 0.005)
+              best_ang = std::min(best_ang, v.min_angle(moves[k].m, a.axis));
+          }
           cursor = best_k;
           acc.add(best, best_ang, l.line);
         }
