@@ -280,15 +280,23 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
       return;
     }
     nc::BlockEdit edit;
+    bool g91 = false;
     for (size_t k = 0; k < l.block.words.size(); ++k) {
       const nc::Word& w = l.block.words[k];
       if (w.letter == 'G' && (w.code10 == 930 || w.code10 == 940)) edit.remove.push_back(static_cast<int>(k));
+      if (w.letter == 'G' && w.code10 == 910) {
+        edit.remove.push_back(static_cast<int>(k));
+        g91 = true;
+      }
       if (w.letter == 'G' && (w.code10 == 0 || w.code10 == 10 || w.code10 == 20 || w.code10 == 30))
         out_motion_ = w.code10;
     }
     for (int k : l.strip) edit.remove.push_back(k);
+    // The output states absolute machine positions: G91 becomes G90.
+    if (g91) edit.insert = lower ? "g90" : "G90";
     if (!l.strip.empty())
-      edit.insert = "(volmap post: LinuxCNC kinematics switch removed, the output commands machine axes)";
+      edit.insert += std::string(edit.insert.empty() ? "" : " ") +
+                     "(volmap post: LinuxCNC kinematics switch removed, the output commands machine axes)";
     if (edit.remove.empty()) {
       emit(l.block.text, reader_newline_);
       return;
@@ -334,17 +342,19 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
       continue;
     }
     nc::BlockEdit edit;
+    bool g91 = false;
     for (size_t k = 0; k < l.block.words.size(); ++k) {
       const nc::Word& w = l.block.words[k];
       const char L = w.letter;
       const bool axis = L == 'X' || L == 'Y' || L == 'Z' || L == 'A' || L == 'B' || L == 'C' || L == 'I' ||
                         L == 'J' || L == 'K' || L == 'F';
       const bool modal = L == 'G' && (w.code10 == 0 || w.code10 == 10 || w.code10 == 20 || w.code10 == 30 ||
-                                      w.code10 == 930 || w.code10 == 940);
+                                      w.code10 == 930 || w.code10 == 940 || w.code10 == 910);
       if (axis || modal) edit.remove.push_back(static_cast<int>(k));
+      if (L == 'G' && w.code10 == 910) g91 = true;
     }
     for (int k : l.strip) edit.remove.push_back(k);
-    edit.insert = words;
+    edit.insert = g91 ? (lower ? "g90 " : "G90 ") + words : words;
     if (!l.strip.empty()) edit.insert += " (volmap post: LinuxCNC kinematics switch removed)";
     // The motion word was removed: the output's modal state before this
     // line is what move_text assumed.

@@ -11,7 +11,9 @@
 //    model, lies on the nominal path within the tolerances; verify agrees;
 //  - feeds: inverse time keeps the programmed time of every move;
 //  - the three input forms give the same machine program.
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <sstream>
 #include <string>
@@ -235,6 +237,75 @@ TEST(FiveAxisPost, ZeroErrorsTcpProgramKeepsTheAnglesAndPlacesTheTipExactly) {
   }
 }
 
+// Every other supported machine type: the B-C table-table sample. Zero
+// errors: each programmed pose is the nominal forward transformation of
+// the written axes (round trip, within rounding). With location errors of
+// B and C: the actual tool tip at every written position lies on the
+// nominal path within the tolerance plus rounding.
+TEST(FiveAxisPost, BcTableTableRoundTripAndCorrection) {
+  const Machine m = test::sample_machine("bc-table-table");
+  ErrorSet e;
+  e.location = {{"EX0C", 0.02}, {"EY0C", -0.015}, {"EA0C", 40e-6}, {"EB0C", -30e-6},
+                {"EX0B", 0.025}, {"EZ0B", -0.01}, {"EA0B", 25e-6}, {"EC0B", 50e-6}};
+  std::vector<ToolPose> path;
+  for (int i = 0; i <= 60; ++i) {
+    const double t = i * 0.05, tilt = (5 + 40.0 * i / 60) * kDeg;
+    path.push_back({Vector3d(30 * std::cos(t), 30 * std::sin(t), 10 + 0.2 * i),
+                    Vector3d(std::sin(tilt) * std::cos(2 * t), std::sin(tilt) * std::sin(2 * t), std::cos(tilt))});
+  }
+  const std::string prog = vector_program(path);
+  std::string text;
+  run_post(prog, m, ErrorSet{}, post::FiveAxisPostOptions{}, text);
+  // Output words X Y Z B C: parse them here (parse_output knows A C only).
+  auto positions = [&](const std::string& t) {
+    std::vector<std::pair<bool, AxisVector>> out;  // (numbered, u)
+    std::istringstream in(t);
+    std::string l;
+    int n = 0;
+    while (std::getline(in, l)) {
+      const nc::Block b = nc::lex_block(l, ++n, "out");
+      AxisVector u = AxisVector::Zero(5);
+      bool move = false, numbered = false;
+      for (const nc::Word& w : b.words) {
+        if (w.letter == 'N') numbered = true;
+        const char* at = std::strchr("XYZBC", w.letter);
+        if (w.letter != 0 && at) {
+          const int k = static_cast<int>(at - "XYZBC");
+          u[k] = k < 3 ? w.value : w.value * kDeg;
+          move = true;
+        }
+      }
+      if (move) out.push_back({numbered, u});
+    }
+    return out;
+  };
+  std::vector<AxisVector> ends;
+  for (const auto& [numbered, u] : positions(text)) {
+    if (numbered) ends.push_back(u);
+    else ends.back() = u;
+  }
+  ASSERT_EQ(ends.size(), path.size());
+  for (size_t i = 0; i < path.size(); ++i) {
+    const ToolPose v = nominal_forward(m, ends[i]);
+    EXPECT_LT((v.tip_mm - path[i].tip_mm).norm(), std::sqrt(3.0) * 0.5e-4 + 2 * 0.5e-5 * kDeg * 400) << i;
+    EXPECT_LT((v.axis - path[i].axis).norm(), 2 * 0.5e-5 * kDeg + 1e-8) << i;
+  }
+  // With errors.
+  post::FiveAxisPostOptions o;
+  run_post(prog, m, e, o, text);
+  ErrorModel model(m, e);
+  const double rounding_mm = std::sqrt(3.0) * 0.5e-4 + 2 * 0.5e-5 * kDeg * 400;
+  size_t group = 0;
+  for (const auto& [numbered, u] : positions(text)) {
+    if (numbered) ++group;
+    if (group < 2) continue;  // the first line is a rapid
+    nc::Motion seg;
+    seg.start_mm = path[group - 2].tip_mm;
+    seg.end_mm = path[group - 1].tip_mm;
+    EXPECT_LT(nc::distance_to_path(seg, model.actual(u).tip_mm), o.tolerance_mm + rounding_mm) << group;
+  }
+}
+
 // A tool axis that circles the vertical on a narrow cone (C turns fast),
 // crosses the vertical (singular: C held), and sweeps back: with feed
 // moves (segmented) and the sample errors, no written C step reaches 180
@@ -386,6 +457,57 @@ TEST(FiveAxisPost, InputFormsAgree) {
   EXPECT_GT(a.size(), 3u);
   EXPECT_EQ(moves(siemens, post::InputForm::kToolVector), a);
   EXPECT_EQ(moves(apt, post::InputForm::kApt), a);
+}
+
+// Inch and incremental programs of the same path: the same machine
+// positions (inch output in inch: 5 decimals), always absolute (G91 becomes
+// G90 in the output).
+TEST(FiveAxisPost, InchAndIncrementalProgramsGiveTheSamePositions) {
+  const Machine m = test::sample_machine("lei-hsu-xyzac");
+  const ErrorSet e = test::sample_errors("lei-hsu-xyzac");
+  const std::vector<std::array<double, 5>> pts = {
+      {0, 0, 20, 0, 0}, {10, 5, 15, -20, 30}, {25.4, -12.7, 10, -35, 75}, {-5, 20, 12, -50, 140}};
+  std::string mm = "G21 G90\n", inch = "G20 G90\n", inc = "G21 G90\n";
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const auto& p = pts[i];
+    const char* g = i == 0 ? "G0" : "G1";
+    const char* f = i == 0 ? "" : " F400";
+    mm += fmt::format("N{} {} X{} Y{} Z{} A{} C{}{}\n", i + 1, g, p[0], p[1], p[2], p[3], p[4], f);
+    inch += fmt::format("N{} {} X{:.8f} Y{:.8f} Z{:.8f} A{} C{}{}\n", i + 1, g, p[0] / 25.4, p[1] / 25.4,
+                        p[2] / 25.4, p[3], p[4], i == 0 ? "" : " F15.748031");
+    if (i == 0) {
+      inc += fmt::format("N1 G0 X{} Y{} Z{} A{} C{}\nG91\n", p[0], p[1], p[2], p[3], p[4]);
+    } else {
+      const auto& q = pts[i - 1];
+      inc += fmt::format("N{} G1 X{:.6f} Y{:.6f} Z{:.6f} A{:.6f} C{:.6f} F400\n", i + 1, p[0] - q[0], p[1] - q[1],
+                         p[2] - q[2], p[3] - q[3], p[4] - q[4]);
+    }
+  }
+  auto ends = [&](const std::string& prog, double unit) {
+    std::string text;
+    run_post(prog, m, e, post::FiveAxisPostOptions{}, text);
+    EXPECT_EQ(text.find("G91"), std::string::npos) << text;
+    std::vector<OutLine> g = group_ends(parse_output(text));
+    for (OutLine& o : g) {
+      o.u.x *= unit;
+      o.u.y *= unit;
+      o.u.z *= unit;
+    }
+    return g;
+  };
+  const std::vector<OutLine> a = ends(mm, 1.0), b = ends(inch, 25.4), c = ends(inc, 1.0);
+  ASSERT_EQ(a.size(), pts.size());
+  ASSERT_EQ(b.size(), pts.size());
+  ASSERT_EQ(c.size(), pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    for (const OutLine* o : {&b[i], &c[i]}) {
+      EXPECT_NEAR(o->u.x, a[i].u.x, 0.5e-4 + 25.4 * 0.5e-5) << i;
+      EXPECT_NEAR(o->u.y, a[i].u.y, 0.5e-4 + 25.4 * 0.5e-5) << i;
+      EXPECT_NEAR(o->u.z, a[i].u.z, 0.5e-4 + 25.4 * 0.5e-5) << i;
+      EXPECT_NEAR(o->u.a, a[i].u.a, 1e-5 * kDeg) << i;
+      EXPECT_NEAR(o->u.c, a[i].u.c, 1e-5 * kDeg) << i;
+    }
+  }
 }
 
 TEST(FiveAxisPost, DetectsTheInputForm) {
