@@ -206,6 +206,51 @@ TEST_P(RealFiveAxisProgram, PostedRs274AcceptsAndTheToolFollowsTheNominalPath) {
   EXPECT_LT(worst, 1e-3 + slack_mm);
 }
 
+// The other input forms: an APT/CLDATA file and a Siemens-style tool-vector
+// program, posted for the sample machine; rs274 reads every output, and its
+// feed points are the positions volmap wrote.
+TEST(FiveAxisRs274, AptAndToolVectorOutputsAreAccepted) {
+  if (!have_rs274()) {
+    if (std::getenv("VOLMAP_REQUIRE_RS274")) FAIL() << "rs274 (linuxcnc-uspace) is required but missing";
+    GTEST_SKIP() << "rs274 not installed (apt-get install linuxcnc-uspace)";
+  }
+  std::string apt = "PARTNO/RS274 CHECK\nMULTAX\nUNITS/MM\nSPINDL/1200,CLW\nRAPID\nGOTO/20,0,40,0,0,1\nFEDRAT/MMPM,800\n";
+  std::string vec = "G21 G90 G94\nG0 X20 Y0 Z40 A3=0 B3=0 C3=1\n";
+  for (int i = 1; i <= 72; ++i) {
+    const double t = i * 5 * M_PI / 180, tilt = 25 * M_PI / 180;
+    const double x = 20 * std::cos(t), y = 20 * std::sin(t), z = 10 + i * 0.1;
+    const double ti = std::sin(tilt) * std::cos(t), tj = std::sin(tilt) * std::sin(t), tk = std::cos(tilt);
+    char line[200];
+    std::snprintf(line, sizeof line, "GOTO/%.4f,%.4f,%.4f,%.7f,%.7f,%.7f\n", x, y, z, ti, tj, tk);
+    apt += line;
+    std::snprintf(line, sizeof line, "G1 X%.4f Y%.4f Z%.4f A3=%.7f B3=%.7f C3=%.7f F800\n", x, y, z, ti, tj, tk);
+    vec += line;
+  }
+  apt += "SPINDL/OFF\nFINI\n";
+  vec += "M30\n";
+  const std::string machine = test::source_path("samples/machines/lei-hsu-xyzac.json");
+  const std::string errors = test::source_path("samples/errors/lei-hsu-xyzac.csv");
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"cone.apt", apt}, {"cone.mpf", vec}}) {
+    const std::string in = ::testing::TempDir() + "volmap5_" + name, out = in + ".ngc";
+    std::ofstream(in) << text;
+    fs::remove(out);
+    const test::CliResult post = test::run_volmap("post --machine " + machine + " --errors " + errors + " " + in + " -o " + out);
+    ASSERT_EQ(post.status, 0) << post.err;
+    const std::string canon = out + ".canon";
+    ASSERT_EQ(std::system(("rs274 -g " + out + " " + canon + " >" + canon + ".log 2>&1").c_str()), 0);
+    std::string rs_errors;
+    const std::vector<Pose5> feeds = canonical_feeds(canon, rs_errors);
+    EXPECT_TRUE(rs_errors.empty()) << name << ": " << rs_errors;
+    const std::vector<Pose5> written = written_feeds(out);
+    ASSERT_EQ(feeds.size(), written.size()) << name;
+    EXPECT_GE(feeds.size(), 72u) << name;
+    for (size_t i = 0; i < feeds.size(); ++i) {
+      EXPECT_NEAR(feeds[i].x, written[i].x, 0.6e-4) << name << " " << i;
+      EXPECT_NEAR(feeds[i].c, written[i].c, 0.6e-4) << name << " " << i;
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(LinuxCncDemos, RealFiveAxisProgram,
                          ::testing::Values("impeller-7bl-xyzac.ngc", "boat-xyzac.ngc"),
                          [](const ::testing::TestParamInfo<const char*>& i) {
