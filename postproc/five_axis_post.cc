@@ -103,7 +103,20 @@ class FiveAxisPost {
   struct Piece {
     AxisVector c;  ///< commanded
     double s1;
+    bool forced = false;  ///< accepted at the smallest span (a turn at the singular position)
   };
+  // The written axis words of c without letters (to find repeated lines).
+  std::string axes_key(const AxisVector& c, double unit_mm) const {
+    const Machine& mach = tf_.machine();
+    const int dec = o_.decimals >= 0 ? o_.decimals : (unit_mm > 1.0 ? 5 : 4);
+    std::string k;
+    for (int i = 0; i < mach.axis_count(); ++i) {
+      if (is_rotary(mach.axis_order[static_cast<size_t>(i)])) append_number(k, c[i] * kRadToDeg, o_.angle_decimals);
+      else append_number(k, c[i] / unit_mm, dec);
+      k += ' ';
+    }
+    return k;
+  }
   void segment(const FiveAxisMove& m, std::vector<Piece>& pieces);
   void start_if_needed(const FiveAxisMove& m);
   double move_time_min(const FiveAxisMove& m) const;
@@ -191,7 +204,7 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
         for (int k2 = 0; k2 < mach.axis_count(); ++k2)
           if (is_rotary(mach.axis_order[static_cast<size_t>(k2)]))
             report_.max_rotary_step_rad = std::max(report_.max_rotary_step_rad, std::abs(c1[k2] - c_[k2]));
-        pieces.push_back({c1, s1});
+        pieces.push_back({c1, s1, !ok});
         if (pieces.size() > kMaxPieces)
           fail(fmt::format("more than {} pieces needed to keep {:g} um and {:g} urad; raise the tolerances",
                            kMaxPieces, o_.tolerance_mm * 1e3, o_.angle_tolerance_rad * 1e6));
@@ -323,12 +336,48 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
     segment(m, pieces_);
   }
   const double T = m.rapid ? 0.0 : move_time_min(m);
+  // Pieces that would repeat the previous position at the written
+  // resolution are merged into the next one (the last one stays).
+  {
+    std::string last = axes_key(from, l.unit_mm);
+    size_t kept = 0;
+    for (size_t p = 0; p < pieces_.size(); ++p) {
+      std::string key = axes_key(pieces_[p].c, l.unit_mm);
+      if (key == last && p + 1 < pieces_.size()) {
+        pieces_[p + 1].forced = pieces_[p + 1].forced || pieces_[p].forced;
+        continue;
+      }
+      last = std::move(key);
+      pieces_[kept++] = pieces_[p];
+    }
+    pieces_.resize(kept);
+  }
+  // Time: each piece its share of the nominal path; a piece accepted at the
+  // smallest span (C turning to the new azimuth as the tool leaves the
+  // singular position) at least its share of the move's rotary travel, so
+  // that the turn is not commanded in no time.
+  const Machine& mach = tf_.machine();
+  auto rotary_travel = [&](const AxisVector& a, const AxisVector& b) {
+    double r = 0;
+    for (int k = 0; k < mach.axis_count(); ++k)
+      if (is_rotary(mach.axis_order[static_cast<size_t>(k)])) r = std::max(r, std::abs(b[k] - a[k]));
+    return r;
+  };
+  double rot_total = 0;
+  {
+    AxisVector a = from;
+    for (const Piece& pc : pieces_) {
+      rot_total += rotary_travel(a, pc.c);
+      a = pc.c;
+    }
+  }
   AxisVector prev = from;
   double s_prev = 0.0;
   ++report_.lines_changed;
   for (size_t p = 0; p < pieces_.size(); ++p) {
-    const std::string words = move_text(pieces_[p].c, l.unit_mm, lower, spaces, motion,
-                                        T * (pieces_[p].s1 - s_prev), prev);
+    double share = pieces_[p].s1 - s_prev;
+    if (pieces_[p].forced && rot_total > 0) share = std::max(share, rotary_travel(prev, pieces_[p].c) / rot_total);
+    const std::string words = move_text(pieces_[p].c, l.unit_mm, lower, spaces, motion, T * share, prev);
     prev = pieces_[p].c;
     s_prev = pieces_[p].s1;
     const bool newline = p + 1 < pieces_.size() || reader_newline_;
