@@ -142,6 +142,7 @@ class FiveAxisPost {
   int out_motion_ = -1;     ///< modal motion of the output (x10), -1 unknown
   int out_feed_mode_ = 940; ///< modal feed mode of the output
   std::vector<Piece> pieces_;
+  std::vector<std::pair<double, double>> stack_;  ///< segmentation work list (reused)
 };
 
 void FiveAxisPost::start_if_needed(const FiveAxisMove& m) {
@@ -170,7 +171,8 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
     fail("the tool axis turns by 180 degrees in one move; its path is undefined: add a point between");
   const Machine& mach = tf_.machine();
   constexpr int kMaxPieces = 1 << 16;
-  std::vector<std::pair<double, double>> stack;
+  std::vector<std::pair<double, double>>& stack = stack_;
+  stack.clear();
   double s_prev = 0.0;
   for (int k = 1; k <= n0; ++k) {
     stack.push_back({s_prev, static_cast<double>(k) / n0});

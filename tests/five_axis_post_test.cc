@@ -13,7 +13,9 @@
 //  - the three input forms give the same machine program.
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <new>
 #include <random>
 #include <sstream>
 #include <string>
@@ -32,6 +34,19 @@
 #include "postproc/five_axis_transform.h"
 #include "postproc/five_axis_verify.h"
 #include "tests/support/samples.h"
+
+// Counts heap allocations through operator new (the per-pose path must make
+// none; STYLE.md rule 3).
+namespace {
+thread_local long g_allocations = 0;
+}  // namespace
+[[gnu::noinline]] void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace volmap {
 namespace {
@@ -550,6 +565,26 @@ TEST(FiveAxisPost, LinesWithoutMovesPassUnchanged) {
   EXPECT_NE(text.find("%\n(a comment)\nS600 M3 ; spindle\n"), std::string::npos) << text;
   EXPECT_EQ(text.find("M428"), std::string::npos) << text;
   EXPECT_NE(text.find("\nM5\nM30\n%\n"), std::string::npos) << text;
+}
+
+// Backward transformation, correction and formatting into a reserved
+// buffer: no heap allocation per pose.
+TEST(FiveAxisPost, PosePathAllocatesNothing) {
+  const Machine m = test::sample_machine("lei-hsu-xyzac");
+  const post::FiveAxisTransform tf(m, test::sample_errors("lei-hsu-xyzac"), OutsidePolicy::kError);
+  const std::vector<ToolPose> poses = random_poses(Offsets{}, 200, 21);
+  std::string out;
+  out.reserve(1 << 16);
+  AxisVector prev = m.home;
+  const long before = g_allocations;
+  for (const ToolPose& v : poses) {
+    const AxisVector u = tf.axes_for_pose(v, prev);
+    const AxisVector c = tf.command(u);
+    for (int k = 0; k < 5; ++k) post::append_number(out, c[k], 4);
+    prev = u;
+  }
+  EXPECT_EQ(g_allocations - before, 0);
+  EXPECT_GT(out.size(), 1000u);
 }
 
 TEST(FiveAxisPost, AppendNumberMatchesFormatNumberOffTies) {
