@@ -41,10 +41,9 @@ struct NominalAt {
 
 class FiveAxisPost {
  public:
-  FiveAxisPost(const std::string& file, std::ostream& out, const Machine& machine,
-               const ErrorSet& errors, const FiveAxisPostOptions& o)
-      : file_(file), out_(out), o_(o),
-        tf_(machine, errors, o.outside, correction_options(o)) {
+  FiveAxisPost(const std::string& file, std::ostream& out, const FiveAxisTransform& tf,
+               const FiveAxisPostOptions& o)
+      : file_(file), out_(out), o_(o), tf_(tf) {
     const Machine& m = tf_.machine();
     u_nom_ = m.home;
     for (int k = 0; k < m.axis_count(); ++k)
@@ -56,11 +55,6 @@ class FiveAxisPost {
   FiveAxisPostReport report_;
 
  private:
-  static CorrectionOptions correction_options(const FiveAxisPostOptions& o) {
-    CorrectionOptions c;
-    c.max_iterations = o.correction_iterations;
-    return c;
-  }
   NominalAt nominal_at(const FiveAxisMove& m, double s, const AxisVector& previous) const {
     NominalAt n;
     n.v.tip_mm = nc::point_on(m.tip, s);
@@ -131,7 +125,7 @@ class FiveAxisPost {
   std::string file_;
   std::ostream& out_;
   FiveAxisPostOptions o_;
-  FiveAxisTransform tf_;
+  const FiveAxisTransform& tf_;
   int line_ = 0;
   std::string line_ending_ = "\n";
   bool reader_newline_ = true;
@@ -457,8 +451,22 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
                                   const Machine& machine, const ErrorSet& errors,
                                   const FiveAxisPostOptions& options) {
   if (const std::string why = options.invalid_reason(); !why.empty()) throw std::invalid_argument(why);
+  CorrectionOptions c;
+  c.max_iterations = options.correction_iterations;
+  const FiveAxisTransform tf(machine, errors, options.outside, c);
   FiveAxisReader reader(in, in_name, machine, options.form, options.initial);
-  FiveAxisPost post(in_name, out, machine, errors, options);
+  FiveAxisPost post(in_name, out, tf, options);
+  post.run(reader);
+  return post.report_;
+}
+
+FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, std::ostream& out,
+                                  const Machine& machine, const maps::VolumetricTable& table,
+                                  const FiveAxisPostOptions& options) {
+  if (const std::string why = options.invalid_reason(); !why.empty()) throw std::invalid_argument(why);
+  const FiveAxisTransform tf(machine, table, options.outside);
+  FiveAxisReader reader(in, in_name, machine, options.form, options.initial);
+  FiveAxisPost post(in_name, out, tf, options);
   post.run(reader);
   return post.report_;
 }

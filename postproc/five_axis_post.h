@@ -35,6 +35,7 @@
 #include <string>
 
 #include "core/error_model.h"
+#include "maps/volumetric_table.h"
 #include "postproc/five_axis_input.h"
 
 namespace volmap::post {
@@ -69,6 +70,13 @@ struct FiveAxisPostReport {
 /// `machine`: the part origin already placed (Machine::workpiece_origin_mm).
 FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, std::ostream& out,
                                   const Machine& machine, const ErrorSet& errors,
+                                  const FiveAxisPostOptions& options);
+
+/// The same with the errors from a five-axis volumetric table (volmap map)
+/// instead of the model (FiveAxisTransform's table constructor; one-step
+/// correction, segmentation checks against the table's dv).
+FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, std::ostream& out,
+                                  const Machine& machine, const maps::VolumetricTable& table,
                                   const FiveAxisPostOptions& options);
 
 /// The nominal tool axis at path parameter s of a move (unit; slerp for

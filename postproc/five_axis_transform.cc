@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include "core/jacobian.h"
+
 namespace volmap::post {
 
 bool error_set_empty(const ErrorSet& errors) {
@@ -36,10 +38,67 @@ AxisVector FiveAxisTransform::axes_for_pose(const ToolPose& v_w, const AxisVecto
   return kin_.backward_selected(snapped, previous, singular);
 }
 
+FiveAxisTransform::FiveAxisTransform(const Machine& machine, const maps::VolumetricTable& table,
+                                     OutsidePolicy outside)
+    : kin_(machine), table_(&table), outside_(outside) {
+  if (!kin_.has_rotary_axes())
+    throw std::invalid_argument("the five-axis post needs a machine with two rotary axes");
+  if (table.axis_count() != machine.axis_count())
+    throw std::invalid_argument(fmt::format("the table has {} axes, machine \"{}\" {}", table.axis_count(),
+                                            machine.name, machine.axis_count()));
+  if (table.channel_count() > 16) throw std::invalid_argument("the table has too many channels");
+  static constexpr const char* kNames[6] = {"ex", "ey", "ez", "ei", "ej", "ek"};
+  for (size_t c = 0; c < 6; ++c) {
+    const std::optional<int> k = table.channel(kNames[c]);
+    if (!k)
+      throw std::invalid_argument(std::string("the table has no channel ") + kNames[c] +
+                                  "; build it for the five-axis machine with volmap map");
+    channel_[c] = *k;
+  }
+}
+
+void FiveAxisTransform::table_dv(const AxisVector& u, Eigen::Vector3d& dP, Eigen::Vector3d& dQ) const {
+  double v[16];
+  maps::interpolate(*table_, u, 0, table_->checked_with, outside_, v);
+  dP = Eigen::Vector3d(v[channel_[0]], v[channel_[1]], v[channel_[2]]);
+  dQ = Eigen::Vector3d(v[channel_[3]], v[channel_[4]], v[channel_[5]]);
+}
+
 AxisVector FiveAxisTransform::command(const AxisVector& u_nominal, bool* singular) const {
   if (zero_) {
     if (singular) *singular = false;
     return u_nominal;
+  }
+  if (table_) {
+    // du = -J^-1 dv (eq. 6), block-wise: rotary axes by least squares on
+    // the orientation rows, then the linear axes exactly.
+    const Machine& m = kin_.machine();
+    PoseJacobian J;
+    nominal_forward_jacobian(m, u_nominal, J);
+    Eigen::Vector3d dP, dQ;
+    table_dv(u_nominal, dP, dQ);
+    std::array<int, 3> lin{};
+    for (int i = 0, k = 0; i < m.axis_count(); ++i)
+      if (!is_rotary(m.axis_order[static_cast<size_t>(i)])) lin[static_cast<size_t>(k++)] = i;
+    const int ro = kin_.outer_index(), ri = kin_.inner_index();
+    Eigen::Matrix3d Jl;
+    Eigen::Matrix<double, 3, 2> Jpr, G;
+    for (int c = 0; c < 3; ++c) Jl.col(c) = J.block<3, 1>(0, lin[static_cast<size_t>(c)]);
+    Jpr.col(0) = J.block<3, 1>(0, ro);
+    Jpr.col(1) = J.block<3, 1>(0, ri);
+    G.col(0) = J.block<3, 1>(3, ro);
+    G.col(1) = J.block<3, 1>(3, ri);
+    Eigen::Vector2d dr = Eigen::Vector2d::Zero();
+    const bool sing = G.col(0).norm() <= CorrectionOptions{}.singular_sin;
+    if (sing) dr[1] = G.col(1).dot(-dQ) / G.col(1).squaredNorm();
+    else dr = (G.transpose() * G).inverse() * (G.transpose() * -dQ);
+    const Eigen::Vector3d dl = Jl.inverse() * (-dP - Jpr * dr);
+    AxisVector c = u_nominal;
+    c[ro] += dr[0];
+    c[ri] += dr[1];
+    for (int k = 0; k < 3; ++k) c[lin[static_cast<size_t>(k)]] += dl[k];
+    if (singular) *singular = sing;
+    return c;
   }
   const CorrectionResult r = solver_->correct(u_nominal);
   if (singular) *singular = r.singular;
@@ -48,6 +107,14 @@ AxisVector FiveAxisTransform::command(const AxisVector& u_nominal, bool* singula
 
 ToolPose FiveAxisTransform::actual(const AxisVector& u) const {
   if (zero_) return nominal_forward(kin_.machine(), u);
+  if (table_) {
+    ToolPose v = nominal_forward(kin_.machine(), u);
+    Eigen::Vector3d dP, dQ;
+    table_dv(u, dP, dQ);
+    v.tip_mm += dP;
+    v.axis = (v.axis + dQ).normalized();
+    return v;
+  }
   return model_->actual(u);
 }
 

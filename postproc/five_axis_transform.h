@@ -9,12 +9,14 @@
 // pose except the output string's growth.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 
 #include "core/correction.h"
 #include "core/error_model.h"
 #include "core/kinematics.h"
+#include "maps/volumetric_table.h"
 
 namespace volmap::post {
 
@@ -29,6 +31,15 @@ class FiveAxisTransform {
   /// cannot handle. `correction` options: core/correction.h.
   FiveAxisTransform(const Machine& machine, const ErrorSet& errors, OutsidePolicy outside,
                     CorrectionOptions correction = {});
+  /// The errors from a five-axis volumetric table (volmap map: channels
+  /// ex ey ez ei ej ek, dv per node) instead of the model: the correction is
+  /// the one step du = -J^-1 dv(u) of eq. 6 with dv interpolated (the
+  /// table's own interpolation method), J the nominal Jacobian at u, solved
+  /// block-wise as CorrectionSolver does (singular: the outer axis
+  /// suppressed within |Q x w_outer| <= 1e-3); actual() is nominal + dv(u).
+  /// Keeps a reference to `table`. Throws std::invalid_argument when the
+  /// table does not fit the machine (axis count, channels).
+  FiveAxisTransform(const Machine& machine, const maps::VolumetricTable& table, OutsidePolicy outside);
 
   const Machine& machine() const { return kin_.machine(); }
   const Kinematics& kinematics() const { return kin_; }
@@ -62,7 +73,13 @@ class FiveAxisTransform {
   ToolPose nominal(const AxisVector& u) const { return nominal_forward(kin_.machine(), u); }
 
  private:
+  // dv from the table at u (mm, unitless), direction layer 0.
+  void table_dv(const AxisVector& u, Eigen::Vector3d& dP, Eigen::Vector3d& dQ) const;
+
   Kinematics kin_;
+  const maps::VolumetricTable* table_ = nullptr;
+  std::array<int, 6> channel_{};
+  OutsidePolicy outside_ = OutsidePolicy::kError;
   std::unique_ptr<ErrorModel> model_;
   std::unique_ptr<CorrectionSolver> solver_;
   bool zero_ = false;

@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <new>
 #include <random>
@@ -27,6 +28,7 @@
 #include "core/error_model.h"
 #include "core/input_error.h"
 #include "gcode/nc_block.h"
+#include "maps/table_builder.h"
 #include "gcode/nc_path.h"
 #include "gcode/nc_writer.h"
 #include "postproc/five_axis_input.h"
@@ -319,6 +321,51 @@ TEST(FiveAxisPost, BcTableTableRoundTripAndCorrection) {
     seg.end_mm = path[group - 1].tip_mm;
     EXPECT_LT(nc::distance_to_path(seg, model.actual(u).tip_mm), o.tolerance_mm + rounding_mm) << group;
   }
+}
+
+// --table: the errors from a five-axis volumetric table (volmap map). The
+// written positions, run through the model itself, put the tool on the
+// nominal path within the tolerance plus the table's own interpolation
+// error (check_table) and rounding.
+TEST(FiveAxisPost, TableInputCorrectsWithinItsInterpolationError) {
+  const Machine m = test::sample_machine("lei-hsu-xyzac");
+  const ErrorSet e = test::sample_errors("lei-hsu-xyzac");
+  const ErrorModel model(m, e);
+  maps::BuildOptions bo;
+  bo.threads = 1;
+  maps::VolumetricTable table = maps::build_table(model, {100, 100, 100, 10 * kDeg, 20 * kDeg}, bo);
+  table.checked_with = maps::Interpolation::kCubic;
+  maps::CheckOptions co;
+  co.method = maps::Interpolation::kCubic;
+  co.random_points = 2000;
+  co.threads = 1;
+  co.check_correction = false;
+  const double table_um = maps::check_table(model, table, co).max_dv_um;
+  const Offsets off;
+  const std::vector<ToolPose> ends = {eq10_15(off, 40, -30, 120, -35 * kDeg, 20 * kDeg),
+                                      eq10_15(off, -60, 50, 150, -50 * kDeg, 75 * kDeg)};
+  std::vector<ToolPose> path;
+  for (int i = 0; i <= 20; ++i) {
+    const double s = i / 20.0;
+    path.push_back({ends[0].tip_mm + s * (ends[1].tip_mm - ends[0].tip_mm),
+                    post::slerp_axis(ends[0].axis, ends[1].axis, s)});
+  }
+  post::FiveAxisPostOptions o;
+  std::istringstream in(vector_program(path));
+  std::ostringstream out;
+  post::post_five_axis(in, "test.ngc", out, m, table, o);
+  const std::vector<OutLine> lines = parse_output(out.str());
+  const std::vector<OutLine> got = group_ends(lines);
+  ASSERT_EQ(got.size(), path.size());
+  const double rounding_mm = std::sqrt(3.0) * 0.5e-4 + 2 * 0.5e-5 * kDeg * 400;
+  for (size_t i = 0; i < path.size(); ++i) {
+    AxisVector u(5);
+    u << got[i].u.x, got[i].u.y, got[i].u.z, got[i].u.a, got[i].u.c;
+    // One step on interpolated dv: the table's error plus the one-step
+    // residual (0.15 um) plus rounding.
+    EXPECT_LT((model.actual(u).tip_mm - path[i].tip_mm).norm(), 1e-3 * table_um + 0.15e-3 + rounding_mm) << i;
+  }
+  std::printf("table interpolation error %.3f um (cubic, 100 mm / 10 deg / 20 deg)\n", table_um);
 }
 
 // A tool axis that circles the vertical on a narrow cone (C turns fast),

@@ -13,6 +13,7 @@
 #include "core/errors_csv.h"
 #include "core/input_error.h"
 #include "core/machine_json.h"
+#include "maps/table_file.h"
 #include "postproc/five_axis_post.h"
 #include "postproc/post_program.h"
 
@@ -21,7 +22,8 @@ namespace {
 
 // The five-axis path (postproc/five_axis_post.h).
 template <typename Opts>
-int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
+int run_five_axis(const Opts& o, const Machine& m) {
+  if (o.errors.empty() && o.table.empty()) throw std::invalid_argument("post needs --errors or --table");
   post::FiveAxisPostOptions opt;
   opt.form = o.five.form();
   opt.tolerance_mm = o.tolerance_um * 1e-3;
@@ -41,8 +43,14 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
     in = &file_in;
     in_name = o.in;
   }
-  AtomicOutput out(o.out, {o.in, o.machine, o.errors});
-  const post::FiveAxisPostReport r = post::post_five_axis(*in, in_name, out.stream(), m, e, opt);
+  AtomicOutput out(o.out, {o.in, o.machine, o.errors.empty() ? o.table : o.errors});
+  post::FiveAxisPostReport r;
+  if (!o.table.empty()) {
+    const maps::VolumetricTable t = maps::load_table(o.table);
+    r = post::post_five_axis(*in, in_name, out.stream(), m, t, opt);
+  } else {
+    r = post::post_five_axis(*in, in_name, out.stream(), m, load_errors_csv(o.errors), opt);
+  }
   out.commit();
   if (isatty(2))
     std::cerr << fmt::format("five-axis ({} input): {} lines, {} moves, {} poses ({} singular), {} lines added, "
@@ -65,7 +73,7 @@ Runner register_post(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("post", "Rewrite an NC program for the real machine (correction of every point, segmented within tolerance)");
   sub->add_option("--machine", o->machine, "Machine definition (JSON)")->required();
   auto* errors = sub->add_option("--errors", o->errors, "Errors CSV (errors.md)");
-  auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map); not yet supported by post");
+  auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map) instead of --errors; five-axis machines only");
   errors->excludes(table);
   sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)");
   sub->add_option("--decimals", o->decimals, "Decimals of rewritten numbers (default 4 in mm, 5 in inch)")->check(CLI::Range(0, 9));
@@ -79,11 +87,11 @@ Runner register_post(CLI::App& app) {
               "  volmap post --machine samples/machines/lei-hsu-xyzac.json --errors samples/errors/lei-hsu-xyzac.csv \\\n"
               "      --part-origin 0,0,0 impeller-7bl-xyzac.ngc -o impeller-machine.ngc");
   return [o]() -> int {
-    if (o->errors.empty())
-      throw std::invalid_argument("post needs --errors (table input is not supported yet)");
     const Machine m = load_machine_json(o->machine);
+    if (o->five.applies(m)) return run_five_axis(*o, o->five.place_part(m));
+    if (o->errors.empty())
+      throw std::invalid_argument("post needs --errors (table input is supported for five-axis machines only)");
     const ErrorSet e = load_errors_csv(o->errors);
-    if (o->five.applies(m)) return run_five_axis(*o, o->five.place_part(m), e);
     const nc::ProgramSetup setup = o->placement.load(m);
     post::PostOptions opt;
     opt.tolerance_mm = o->tolerance_um * 1e-3;
