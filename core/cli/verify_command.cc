@@ -76,7 +76,9 @@ Runner register_verify(CLI::App& app) {
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
   sub->footer("Example:\n  volmap verify --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
-              "      --work-offset 100,100,50 --nominal part.ngc --program part-compensated.ngc --json");
+              "      --work-offset 100,100,50 --nominal part.ngc --program part-compensated.ngc --json\n"
+              "  volmap verify --machine samples/machines/lei-hsu-xyzac.json --errors samples/errors/lei-hsu-xyzac.csv \\\n"
+              "      --nominal impeller-7bl-xyzac.ngc --program impeller-machine.ngc");
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
     const ErrorSet e = load_errors_csv(o->errors);
