@@ -485,6 +485,28 @@ TEST(FiveAxisPost, InverseTimeKeepsTheProgrammedTime) {
   EXPECT_NEAR(t20, L / 600.0, 1e-6 * L / 600 + 1e-7 * 20);
   EXPECT_NEAR(t30, 1.0 / 4.0, 1e-6);
   EXPECT_NE(text.find("G93"), std::string::npos);
+
+  // Per minute (G94): F over each piece's machine X Y Z length gives the
+  // same times.
+  post::FiveAxisPostOptions pm;
+  pm.feed = post::FeedOutput::kPerMinute;
+  run_post(prog, m, e, pm, text);
+  EXPECT_EQ(text.find("G93"), std::string::npos);
+  const std::vector<OutLine> out2 = parse_output(text);
+  t20 = t30 = 0;
+  group = 0;
+  Axes prev{};
+  for (const OutLine& l : out2) {
+    if (l.numbered) group = l.n;
+    if (l.move && group >= 20) {
+      const double len = std::sqrt(std::pow(l.u.x - prev.x, 2) + std::pow(l.u.y - prev.y, 2) + std::pow(l.u.z - prev.z, 2));
+      (group == 20 ? t20 : t30) += len / l.f;
+    }
+    if (l.move) prev = l.u;
+  }
+  // Lengths from the written (rounded) numbers: 1e-4 relative.
+  EXPECT_NEAR(t20, L / 600.0, 1e-3 * L / 600);
+  EXPECT_NEAR(t30, 1.0 / 4.0, 1e-3);
 }
 
 // The same path as a TCP-free tool-vector program, a Siemens A3= B3= C3=
