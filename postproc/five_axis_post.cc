@@ -137,6 +137,7 @@ class FiveAxisPost {
   int out_feed_mode_ = 940; ///< modal feed mode of the output
   std::vector<Piece> pieces_;
   std::vector<std::pair<double, double>> stack_;  ///< segmentation work list (reused)
+  std::vector<Piece> turn_;                        ///< pieces of one accepted step (reused)
 };
 
 void FiveAxisPost::start_if_needed(const FiveAxisMove& m) {
@@ -197,14 +198,41 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
       }
       if (ok || s1 - s0 < 1e-7) {
         if (n1.singular) ++report_.singular_poses;
-        for (int k2 = 0; k2 < mach.axis_count(); ++k2)
-          if (is_rotary(mach.axis_order[static_cast<size_t>(k2)]))
-            report_.max_rotary_step_rad = std::max(report_.max_rotary_step_rad, std::abs(c1[k2] - c_[k2]));
-        pieces.push_back({c1, s1, !ok});
+        if (ok) {
+          turn_.assign(1, Piece{c1, s1, false});
+        } else {
+          // The backward solution jumps here (C turning to the new azimuth
+          // as the tool leaves the singular position): turn the rotary
+          // axes over the jump with the tip held on the path — linear in
+          // the rotary axes, each position placing the tip (and corrected)
+          // — in as many pieces as the tip tolerance needs.
+          const AxisVector u0 = u_nom_;
+          for (int n = 2;; n *= 2) {
+            turn_.clear();
+            bool pass = true;
+            AxisVector cprev = c_;
+            for (int k = 1; k <= n && pass; ++k) {
+              const double t = static_cast<double>(k) / n, s = s0 + t * (s1 - s0);
+              const AxisVector uk = k == n ? n1.u : tf_.axes_for_angles(u0 + t * (n1.u - u0), nc::point_on(m.tip, s));
+              const AxisVector ck = k == n ? c1 : command(uk);
+              for (double tt : {0.25, 0.5, 0.75})
+                if (nc::distance_to_path(m.tip, tf_.actual(cprev + tt * (ck - cprev)).tip_mm) > tol) pass = false;
+              turn_.push_back({ck, s, true});
+              cprev = ck;
+            }
+            if (pass || n >= 4096) break;
+          }
+        }
+        for (const Piece& pc : turn_) {
+          for (int k2 = 0; k2 < mach.axis_count(); ++k2)
+            if (is_rotary(mach.axis_order[static_cast<size_t>(k2)]))
+              report_.max_rotary_step_rad = std::max(report_.max_rotary_step_rad, std::abs(pc.c[k2] - c_[k2]));
+          pieces.push_back(pc);
+          c_ = pc.c;
+        }
         if (pieces.size() > kMaxPieces)
           fail(fmt::format("more than {} pieces needed to keep {:g} um and {:g} urad; raise the tolerances",
                            kMaxPieces, o_.tolerance_mm * 1e3, o_.angle_tolerance_rad * 1e6));
-        c_ = c1;
         u_nom_ = n1.u;
         residual_angle_ = r1;
         s_prev = s1;

@@ -393,6 +393,14 @@ TEST(FiveAxisPost, CNeverJumpsHalfATurn) {
     const post::FiveAxisPostReport r = run_post(vector_program(poses), m, errors, post::FiveAxisPostOptions{}, text);
     EXPECT_GT(r.singular_poses, 0u);
     EXPECT_LT(r.max_rotary_step_rad, M_PI / 2);
+    // Leaving the singular position C turns to the new azimuth with the tip
+    // held on the path (20 mm off the C axis): no gouge.
+    if (!errors.location.empty() || errors.errors_of(AxisName::X)) {
+      std::istringstream nominal(vector_program(poses)), compensated(text);
+      const post::FiveAxisVerifyResult v =
+          post::verify_five_axis(nominal, "in", compensated, "out", m, errors, post::FiveAxisVerifyOptions{});
+      EXPECT_LT(v.after.max_um, 1.0 + 1e3 * (std::sqrt(3.0) * 0.5e-4 + 2 * 0.5e-5 * kDeg * 400));
+    }
     const std::vector<OutLine> out = parse_output(text);
     double prev_c = 0;
     bool first = true;
