@@ -13,7 +13,9 @@
 // within angle_tolerance_rad of the nominal axis at that path parameter
 // (nominal path: the tip along the programmed line or arc; TCP: the rotary
 // angles linear along it; tool vectors: the axis along the great circle).
-// Rapids: their end point only.
+// Where the backward solution jumps (C leaving the singular position) the
+// rotary axes turn over the jump with the tip held on the path. Rapids:
+// their end point only.
 //
 // Feeds: each feed piece gets its time, the programmed time of the move
 // (G94: nominal tip path length / F, or rotary degrees / F for a move
