@@ -70,33 +70,14 @@ AxisVector FiveAxisTransform::command(const AxisVector& u_nominal, bool* singula
     return u_nominal;
   }
   if (table_) {
-    // du = -J^-1 dv (eq. 6), block-wise: rotary axes by least squares on
-    // the orientation rows, then the linear axes exactly.
-    const Machine& m = kin_.machine();
+    // du = -J^-1 dv (eq. 6), block-wise as the model's correction.
     PoseJacobian J;
-    nominal_forward_jacobian(m, u_nominal, J);
+    nominal_forward_jacobian(kin_.machine(), u_nominal, J);
     Eigen::Vector3d dP, dQ;
     table_dv(u_nominal, dP, dQ);
-    std::array<int, 3> lin{};
-    for (int i = 0, k = 0; i < m.axis_count(); ++i)
-      if (!is_rotary(m.axis_order[static_cast<size_t>(i)])) lin[static_cast<size_t>(k++)] = i;
-    const int ro = kin_.outer_index(), ri = kin_.inner_index();
-    Eigen::Matrix3d Jl;
-    Eigen::Matrix<double, 3, 2> Jpr, G;
-    for (int c = 0; c < 3; ++c) Jl.col(c) = J.block<3, 1>(0, lin[static_cast<size_t>(c)]);
-    Jpr.col(0) = J.block<3, 1>(0, ro);
-    Jpr.col(1) = J.block<3, 1>(0, ri);
-    G.col(0) = J.block<3, 1>(3, ro);
-    G.col(1) = J.block<3, 1>(3, ri);
-    Eigen::Vector2d dr = Eigen::Vector2d::Zero();
-    const bool sing = G.col(0).norm() <= CorrectionOptions{}.singular_sin;
-    if (sing) dr[1] = G.col(1).dot(-dQ) / G.col(1).squaredNorm();
-    else dr = (G.transpose() * G).inverse() * (G.transpose() * -dQ);
-    const Eigen::Vector3d dl = Jl.inverse() * (-dP - Jpr * dr);
-    AxisVector c = u_nominal;
-    c[ro] += dr[0];
-    c[ri] += dr[1];
-    for (int k = 0; k < 3; ++k) c[lin[static_cast<size_t>(k)]] += dl[k];
+    AxisVector du;
+    const bool sing = correction_step(kin_, J, dP, dQ, CorrectionOptions{}.singular_sin, du);
+    const AxisVector c = u_nominal + du;
     if (singular) *singular = sing;
     return c;
   }
