@@ -50,11 +50,12 @@ class FiveAxisTransform {
   /// least rotary motion, unlimited axes unwrapped next to previous, the
   /// outer axis held at the singular position). *singular as there.
   /// Near the singular position (|Q x w_outer| <= kSingularSin) the outer
-  /// axis is held too: Kinematics::backward_selected holds it only below
-  /// 1e-10, where its subproblem-2 formula has already lost the angle (for
-  /// |Q x w_outer| below about 1.5e-8, 1 - cos^2 underflows and the outer
-  /// angle comes out 0, neither held nor the azimuth). There the pose's
-  /// axis is taken as the outer axis itself (a change below 1e-7 rad).
+  /// axis is held too, a machining policy: Kinematics::backward_selected
+  /// holds it only below 1e-10 and otherwise turns it to the azimuth of the
+  /// tilt, however small (exactly, since the stable form of subproblem 2),
+  /// which for a tilt of 1e-8 rad means swinging C for an orientation
+  /// change no part can see. There the pose's axis is taken as the outer
+  /// axis itself (a change below 1e-7 rad).
   AxisVector axes_for_pose(const ToolPose& v_w, const AxisVector& previous,
                            bool* singular = nullptr) const;
   static constexpr double kSingularSin = 1e-7;
