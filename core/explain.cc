@@ -1,6 +1,7 @@
 #include "core/explain.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -30,6 +31,7 @@ constexpr double kConfoundCorrelation = 0.98;
 constexpr double kConfoundGainShare = 0.9;
 constexpr double kRidge = 1e-9;            ///< relative to the unit-RMS column scale
 constexpr double kDesignCorrelation = 0.95;
+constexpr int kSparseTargets = 12;        ///< up to this many targets: a value per target
 constexpr const char* kGroupName[4] = {"ex", "ey", "ez", "e"};
 
 // ---------------------------------------------------------------- data ----
@@ -468,7 +470,12 @@ std::vector<Candidate> make_candidates(const Context& c) {
   };
   auto has_along = [&](AxisName k) { return along(k).cwiseAbs().maxCoeff() > 1e-9; };
 
-  for (AxisName k : c.linear) {
+  // Every linear axis of the machine may deflect (the recording need not move it).
+  std::vector<AxisName> deflecting;
+  for (AxisName a : d.m.axis_order)
+    if (!is_rotary(a)) deflecting.push_back(a);
+  const auto moves = [&](AxisName a) { return std::find(c.linear.begin(), c.linear.end(), a) != c.linear.end(); };
+  for (AxisName k : deflecting) {
     if (!has_along(k)) continue;
     const Eigen::VectorXd pk = along(k);
     // cyclic: period scan over the sampled positions.
@@ -482,8 +489,9 @@ std::vector<Candidate> make_candidates(const Context& c) {
         std::sort(gaps.begin(), gaps.end());
         const double gap = gaps[gaps.size() / 2];
         const double span = uq.back() - uq.front();
-        const double p_min = std::max(2.2 * gap, 1e-3), p_max = span / 1.5;
-        if (p_max > p_min) {
+        // At least three periods over the span: a longer 'period' is smooth geometry.
+        const double p_min = std::max(2.2 * gap, 1e-3), p_max = span / 3.0;
+        if (p_max > 1.5 * p_min) {  // else too few positions per period to scan a period at all
           Candidate cand;
           cand.effect = "cyclic";
           cand.axis = k;
@@ -568,7 +576,7 @@ std::vector<Candidate> make_candidates(const Context& c) {
     }
     // thermal drift: offset or scale, settling / rate / temperature.
     const int ki = static_cast<int>(k);
-    for (int scale = 0; scale < 2; ++scale) {
+    for (int scale = 0; scale < (moves(k) ? 2 : 1); ++scale) {
       auto factor = [&d, k, scale](int i) { return scale ? d.q(k, i) / 1000.0 : 1.0; };
       const std::string kind = scale ? "scale" : "offset";
       if (c.has_time) {
@@ -697,7 +705,7 @@ std::vector<Candidate> make_candidates(const Context& c) {
   // sag: K deflects with the position of another axis J, quadratically.
   std::vector<AxisName> inputs = c.linear;
   inputs.insert(inputs.end(), c.rotary.begin(), c.rotary.end());
-  for (AxisName k : c.linear) {
+  for (AxisName k : deflecting) {
     if (!has_along(k)) continue;
     const Eigen::VectorXd pk = along(k);
     for (AxisName j : inputs) {
@@ -828,6 +836,9 @@ std::vector<Candidate> make_candidates(const Context& c) {
         if (it == d.names.end()) continue;
         const int idx = static_cast<int>(it - d.names.begin());
         if (d.gp.col(idx).cwiseAbs().maxCoeff() < 1e-12) continue;
+        // Only errors the baseline lacks: the errors file defines the others.
+        const AxisErrors* given = c.opt.baseline->errors_of(k);
+        if (given && given->present[static_cast<std::size_t>(comp)]) continue;
         const bool angular = comp >= 3;
         const std::string effect = angular ? "angular" : (comp == static_cast<int>(k) ? "scale" : "squareness");
         Candidate lin;
@@ -900,6 +911,21 @@ Model baseline_model(const Data& d, const ExplainOptions& opt, std::string& desc
     cols.push_back(c);
   }
   int location = 0, components = 0;
+  // Degree per linear axis: opt.degree, or (0, automatic) a value per target
+  // for an axis run through at most kSparseTargets targets (as ISO 230-2
+  // evaluates a positioning test: the mean deviation of each target), else cubic.
+  std::array<int, kAxisNameCount> degree_of{};
+  std::string degrees;
+  for (AxisName a : d.m.axis_order) {
+    if (is_rotary(a)) continue;
+    std::vector<double> qs;
+    for (std::size_t e = 0; e < d.n; ++e) qs.push_back(d.q(a, d.row[e]));
+    const int targets = static_cast<int>(unique_sorted(qs).size());
+    int deg = opt.degree;
+    if (deg == 0) deg = targets <= kSparseTargets ? std::max(1, targets - 1) : 3;
+    degree_of[static_cast<std::size_t>(a)] = deg;
+    degrees += fmt::format("{}{} {}", degrees.empty() ? "" : ", ", axis_str(a), deg);
+  }
   if (!opt.baseline) {
     for (std::size_t k = 0; k < d.names.size(); ++k) {
       const ErrorName en = *parse_error_name(d.names[k]);
@@ -912,7 +938,8 @@ Model baseline_model(const Data& d, const ExplainOptions& opt, std::string& desc
       if (is_rotary(en.axis)) continue;
       const AxisLimits& L = d.m.limits[static_cast<std::size_t>(*d.m.index_of(en.axis))];
       const double centre = 0.5 * (L.min + L.max), half = std::max(0.5 * (L.max - L.min), 1e-9);
-      for (int p = 1; p <= opt.degree; ++p) {
+      const int degree = degree_of[static_cast<std::size_t>(en.axis)];
+      for (int p = 1; p <= degree; ++p) {
         Eigen::VectorXd c(n);
         for (Eigen::Index e = 0; e < n; ++e) {
           const double s = (d.q(en.axis, d.row[static_cast<std::size_t>(e)]) - centre) / half;
@@ -943,9 +970,9 @@ Model baseline_model(const Data& d, const ExplainOptions& opt, std::string& desc
                               opt.baseline_file.empty() ? std::string("baseline errors") : opt.baseline_file);
   } else {
     description = fmt::format(
-        "rigid-body, fitted: {} component errors of {} linear axis(es) as polynomials of degree {}, {} location "
+        "rigid-body, fitted: {} component errors of {} linear axis(es) as polynomials (degree {}), {} location "
         "errors, a constant per recorded component; {} of {} parameters identifiable on this recording",
-        components, linear_axes, opt.degree, location, keep.size(), cols.size());
+        components, linear_axes, degrees, location, keep.size(), cols.size());
   }
   return mo;
 }
@@ -1279,7 +1306,7 @@ Machine cartesian_machine_for(const Recordings& rec) {
 }
 
 ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOptions& opt) {
-  if (opt.degree < 1 || opt.degree > 8) throw std::invalid_argument("--degree: expected 1..8");
+  if (opt.degree < 0 || opt.degree > 12) throw std::invalid_argument("--degree: expected 0 (automatic) or 1..12");
   ExplainResult res;
   res.recordings_file = rec.file;
   const Data d = build_data(m, rec, opt);

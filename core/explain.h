@@ -58,7 +58,10 @@ namespace volmap {
 struct ExplainOptions {
   const ErrorSet* baseline = nullptr;  ///< fixed baseline (--baseline); null: fitted rigid body
   std::string baseline_file;           ///< for the description
-  int degree = 3;                      ///< polynomial degree of the fitted component errors
+  /// Polynomial degree of the fitted component errors of the linear axes;
+  /// 0: automatic (a value per target for an axis with at most 12 targets,
+  /// as ISO 230-2 evaluates positioning; cubic for denser sampling).
+  int degree = 0;
   int max_findings = 6;
 };
 

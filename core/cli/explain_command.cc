@@ -17,7 +17,7 @@ namespace {
 Runner register_explain(CLI::App& app) {
   struct Opts {
     std::string recordings, machine, baseline, json, report;
-    int degree = 3;
+    int degree = 0;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand(
@@ -33,8 +33,10 @@ Runner register_explain(CLI::App& app) {
                   "recording");
   sub->add_option("--json", o->json, "Write the JSON result (volmap-explain/1) to this file ('-': standard output)");
   sub->add_option("--report", o->report, "Write a self-contained HTML report with plots to this file");
-  sub->add_option("--degree", o->degree, "Polynomial degree of the fitted component errors (default 3)")
-      ->check(CLI::Range(1, 8));
+  sub->add_option("--degree", o->degree,
+                  "Polynomial degree of the fitted component errors of the linear axes (default 0: automatic, "
+                  "a value per target for an axis with at most 12 targets, else cubic)")
+      ->check(CLI::Range(0, 12));
   sub->footer(
       "Example:\n  volmap explain --recordings samples/recordings/reversal.csv "
       "--machine samples/machines/hsu-3axis.json --json explain.json --report explain.html");
