@@ -69,7 +69,7 @@ std::string svg_panel(const std::string& title, const std::string& xlabel, const
   auto px = [&](double v) { return L + (v - x_lo) / (x_hi - x_lo) * (W - L - R); };
   auto py = [&](double v) { return T + (y_hi - v) / (y_hi - y_lo) * (H - T - B); };
   std::ostringstream s;
-  s << fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
+  s << fmt::format("<svg width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
                    "role=\"img\">",
                    W, H);
   s << fmt::format("<title>{}</title>", html_escape(title));

@@ -25,6 +25,7 @@ sim setup-shift         $m3 $g3
 sim null                $m3 $g3
 sim null-5axis          $m5 $g5
 sim drift-one-direction $m3 $g3
+sim reversal-one-feed   $m3 $g3
 # fixed baseline (explain --baseline samples/errors/...): concealed under the full sample errors
 sim thermal-drift       $m3 samples/errors/hsu-3axis.csv
 sim servo-lag           $m3 samples/errors/hsu-3axis.csv
