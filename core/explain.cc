@@ -272,24 +272,31 @@ struct Gain {
   Eigen::VectorXd fitted;       ///< the part of the residual the block explains (weighted)
 };
 
-Gain profile(const Data& d, const Model& mo, const Block& b) {
+Gain profile(const Data& d, const Model& mo, const Block& b, bool want_fitted = false) {
+  // Gram form: S = C^T C - (X^T C)^T G^-1 (X^T C) is the Gram matrix of the
+  // columns with the model projected out; C~^T r = C^T r since r is
+  // orthogonal to X. Costs n k kc (one product), not a projected copy of C.
   Gain g;
   const Eigen::MatrixXd& C = b.cols;
-  Eigen::MatrixXd CtC = C.transpose() * C;
-  Eigen::MatrixXd Ct = C;
+  const Eigen::MatrixXd CtC = C.transpose() * C;
+  Eigen::MatrixXd S = CtC;
+  Eigen::MatrixXd A;
   if (mo.k() > 0) {
     const Eigen::MatrixXd XtC = mo.X.transpose() * C;
-    const Eigen::MatrixXd A = mo.G_ldlt.solve(XtC);
-    Ct -= mo.X * A;  // the columns with the model projected out
+    A = mo.G_ldlt.solve(XtC);
+    S.noalias() -= XtC.transpose() * A;
   }
-  Eigen::MatrixXd S = Ct.transpose() * Ct;
   g.absorbed_share = 0.0;
   for (Eigen::Index j = 0; j < S.rows(); ++j)
     if (CtC(j, j) > 0) g.absorbed_share = std::max(g.absorbed_share, S(j, j) / CtC(j, j));
   S.diagonal().array() += ridge_of(d);
-  const Eigen::VectorXd gamma = S.ldlt().solve(Ct.transpose() * mo.r);
-  g.fitted = Ct * gamma;
-  g.rss = (mo.r - g.fitted).squaredNorm();
+  const Eigen::VectorXd Ctr = C.transpose() * mo.r;
+  const Eigen::VectorXd gamma = S.ldlt().solve(Ctr);
+  g.rss = mo.rss - Ctr.dot(gamma);
+  if (want_fitted) {
+    g.fitted = C * gamma;
+    if (mo.k() > 0) g.fitted -= mo.X * (A * gamma);
+  }
   return g;
 }
 
@@ -587,8 +594,8 @@ std::vector<Candidate> make_candidates(const Context& c) {
         settle.nonlinear = 1;
         settle.refine = true;
         settle.log_refine = true;
-        for (int j = 0; j <= 30; ++j)
-          settle.grid.push_back(c.duration_s / 30.0 * std::pow(150.0, j / 30.0));  // T/30 .. 5 T
+        for (int j = 0; j <= 16; ++j)
+          settle.grid.push_back(c.duration_s / 30.0 * std::pow(150.0, j / 16.0));  // T/30 .. 5 T
         settle.build = [&d, pk, n, factor](double tau) {
           Eigen::MatrixXd C(n, 1);
           for (Eigen::Index e = 0; e < n; ++e) {
@@ -1128,7 +1135,8 @@ struct Fitted {
 
 /// Fits a candidate's nonlinear parameter (grid, then golden section) by the
 /// profile RSS given the model.
-std::optional<Fitted> fit_candidate(const Data& d, const Model& mo, const Candidate& c) {
+std::optional<Fitted> fit_candidate(const Data& d, const Model& mo, const Candidate& c,
+                                    std::optional<double> hint = std::nullopt) {
   auto eval = [&](double theta) {
     Fitted f;
     f.cand = &c;
@@ -1140,6 +1148,23 @@ std::optional<Fitted> fit_candidate(const Data& d, const Model& mo, const Candid
   std::optional<Fitted> best;
   if (c.grid.empty()) {
     best = eval(0.0);
+  } else if (hint && c.refine) {
+    // A later step: the parameter was scanned before; refine around it
+    // (+-15 %) with the current model.
+    const double gr = (std::sqrt(5.0) - 1) / 2;
+    double a = std::log(*hint / 1.15), b = std::log(*hint * 1.15);
+    double x1 = b - gr * (b - a), x2 = a + gr * (b - a);
+    double f1 = eval(std::exp(x1)).gain.rss, f2 = eval(std::exp(x2)).gain.rss;
+    for (int it = 0; it < 10; ++it) {
+      if (f1 < f2) {
+        b = x2; x2 = x1; f2 = f1; x1 = b - gr * (b - a); f1 = eval(std::exp(x1)).gain.rss;
+      } else {
+        a = x1; x1 = x2; f1 = f2; x2 = a + gr * (b - a); f2 = eval(std::exp(x2)).gain.rss;
+      }
+    }
+    best = eval(std::exp(0.5 * (a + b)));
+    Fitted at_hint = eval(*hint);
+    if (at_hint.gain.rss < best->gain.rss) best = std::move(at_hint);
   } else if (c.effect == "cyclic") {
     // Coarse periodogram of the current residual (2x2 per period, unique
     // positions aggregated), then the full profile at the best peaks.
@@ -1182,7 +1207,7 @@ std::optional<Fitted> fit_candidate(const Data& d, const Model& mo, const Candid
       double a = lo, b = hi;
       double x1 = b - gr * (b - a), x2 = a + gr * (b - a);
       double f1 = eval(1.0 / x1).gain.rss, f2 = eval(1.0 / x2).gain.rss;
-      for (int it = 0; it < 30; ++it) {
+      for (int it = 0; it < 18; ++it) {
         if (f1 < f2) {
           b = x2; x2 = x1; f2 = f1; x1 = b - gr * (b - a); f1 = eval(1.0 / x1).gain.rss;
         } else {
@@ -1211,7 +1236,7 @@ std::optional<Fitted> fit_candidate(const Data& d, const Model& mo, const Candid
       const double gr = (std::sqrt(5.0) - 1) / 2;
       double x1 = b - gr * (b - a), x2 = a + gr * (b - a);
       double f1 = eval(inv(x1)).gain.rss, f2 = eval(inv(x2)).gain.rss;
-      for (int it = 0; it < 25; ++it) {
+      for (int it = 0; it < 14; ++it) {
         if (f1 < f2) {
           b = x2; x2 = x1; f2 = f1; x1 = b - gr * (b - a); f1 = eval(inv(x1)).gain.rss;
         } else {
@@ -1389,6 +1414,7 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
   std::set<std::string> used;  // effect/axis taken
   std::optional<double> ho_current = res.baseline_heldout_rms_um;
   std::set<std::string> not_estimable;
+  std::map<std::string, double> hints;  // nonlinear parameters scanned at an earlier step
   for (int step = 0; step < opt.max_findings + 4; ++step) {
     std::vector<Fitted> fits;
     for (const Candidate& c : cands) {
@@ -1396,7 +1422,10 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
       if (used.count(ea)) continue;
       if (c.effect == "thermal_drift" && c.axis && design_blocked.count(axis_str(*c.axis))) continue;
       if (c.effect == "scale" && c.axis && design_blocked.count(axis_str(*c.axis))) continue;
-      std::optional<Fitted> f = fit_candidate(d, mo, c);
+      const auto h = hints.find(c.key());
+      std::optional<Fitted> f =
+          fit_candidate(d, mo, c, h == hints.end() ? std::nullopt : std::optional<double>(h->second));
+      if (f && c.refine) hints[c.key()] = f->theta;
       if (!f) continue;
       if (f->gain.absorbed_share < kAbsorbed) {
         not_estimable.insert(c.effect + (c.axis ? " " + axis_str(*c.axis) : ""));
@@ -1429,7 +1458,10 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
         if (g.cand->effect == f.cand->effect && g.cand->axis == f.cand->axis) continue;
         const double gain_g = mo.rss - g.gain.rss;
         if (gain_g < kConfoundGainShare * gain_best) continue;
-        if (std::abs(correlation(f.gain.fitted, g.gain.fitted)) < kConfoundCorrelation) continue;
+        if (f.gain.fitted.size() == 0) f.gain = profile(d, mo, f.block, true);
+        const Eigen::VectorXd g_fitted = profile(d, mo, g.block, true).fitted;
+        const double rho = correlation(f.gain.fitted, g_fitted);
+        if (std::abs(rho) < kConfoundCorrelation) continue;
         s.confounded = true;
         Confounded c;
         c.effects = {f.cand->effect, g.cand->effect};
@@ -1439,7 +1471,7 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
         c.explanation = fmt::format(
             "{} {} and {} {} explain the same structure on this recording (fitted deviations correlated {:.3f}, "
             "RMS {:.3g} vs {:.3g} um): the recording cannot tell them apart",
-            f.cand->effect, fa, g.cand->effect, ga, correlation(f.gain.fitted, g.gain.fitted),
+            f.cand->effect, fa, g.cand->effect, ga, rho,
             rms_of(d, f.gain.rss), rms_of(d, g.gain.rss));
         if (f.cand->effect == "reversal" || g.cand->effect == "reversal")
           if (f.cand->effect == "servo_lag" || g.cand->effect == "servo_lag")
