@@ -1271,6 +1271,9 @@ std::string remedy_for(const std::string& a, const std::string& b) {
   if (has("reversal") && has("servo_lag"))
     return "repeat the bidirectional run at a second, very different feed (or with a dwell before each reading): "
            "servo lag scales with feed, lost motion does not";
+  if (has("thermal_drift") && has("setup_shift"))
+    return "measure one reference target at the start and at the end of every run (and log the time of every "
+           "reading): a drift moves within a run as well, a set-up shift only between runs";
   if (has("thermal_drift"))
     return "repeat the run in reverse order or add a return sweep, so that time and position no longer rise together";
   if (has("setup_shift"))
@@ -1559,6 +1562,26 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
       f.plot.after_um.push_back(mo.r[ei] / d.sw[ei]);
       f.plot.before_um.push_back((mo.r[ei] + contrib[ei]) / d.sw[ei]);
       if (c.plot_group) f.plot.group.push_back(c.plot_group(d.row[e]));
+    }
+    if (f.effect == "setup_shift" && !ctx.has_time && d.runs >= 3) {
+      const nlohmann::json& per = f.parameters.front().second;
+      bool up = true, down = true;
+      for (std::size_t r = 1; r < per.size(); ++r) {
+        up = up && per[r].get<double>() > per[r - 1].get<double>();
+        down = down && per[r].get<double>() < per[r - 1].get<double>();
+      }
+      if (up || down) {
+        f.explanation += " The offsets change monotonically in run order and the recording has no time column: a "
+                         "slow drift between runs would look the same.";
+        Confounded cf;
+        cf.effects = {"setup_shift", "thermal_drift"};
+        cf.axis = f.axis;
+        cf.explanation = "the per-run offsets grow monotonically with the run number and no t_s column records when "
+                         "the runs were made: a set-up that moved and a machine that drifted between runs give the "
+                         "same readings";
+        cf.remedy = remedy_for("setup_shift", "thermal_drift");
+        res.confounded.push_back(cf);
+      }
     }
     res.findings.push_back(std::move(f));
   }
