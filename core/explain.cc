@@ -548,9 +548,9 @@ std::vector<Candidate> make_candidates(const Context& c) {
         f.parameters = {{"value_um", num(beta[0])}};
         f.std_errors = {{"value_um", std::sqrt(cov(0, 0))}};
         f.explanation = fmt::format(
-            "{0} deviates {1:.3g} um more when approached from +{0} than from -{0}: lost motion (backlash) "
-            "in the {0} drive, absent from the rigid-body model.",
-            axis_str(k), beta[0]);
+            "{0} deviates {1:.3g} um {2} when approached from +{0} than from -{0} (reversal value B = {3:.3g} um): "
+            "lost motion (backlash) in the {0} drive, absent from the rigid-body model.",
+            axis_str(k), std::abs(beta[0]), beta[0] >= 0 ? "more" : "less", beta[0]);
       };
       rev.plot_x = [&d, k](int i) { return d.q_user(k, i); };
       rev.plot_label = position_name(k);
@@ -852,22 +852,41 @@ std::vector<Candidate> make_candidates(const Context& c) {
         lin.effect = effect;
         lin.axis = k;
         lin.variant = name;
-        lin.build = [&d, n, k, idx, angular](double) {
-          Eigen::MatrixXd C(n, 1);
+        // The positioning error of K (EKK): scale (linear) and its curvature
+        // (s^2, s^3 at the ends of the travel), as a laser calibration gives it.
+        const bool positioning = !angular && comp == static_cast<int>(k);
+        lin.build = [&d, n, k, idx, angular, positioning, centre, half](double) {
+          Eigen::MatrixXd C(n, positioning ? 3 : 1);
           for (Eigen::Index e = 0; e < n; ++e) {
             // error = slope * q / 1000 (um or urad per m); deviation um.
-            const double q = d.q(k, d.row[static_cast<std::size_t>(e)]) / 1000.0;
-            C(e, 0) = d.gp(e, idx) * (angular ? 1e-3 : 1.0) * q;
+            const double qm = d.q(k, d.row[static_cast<std::size_t>(e)]);
+            C(e, 0) = d.gp(e, idx) * (angular ? 1e-3 : 1.0) * qm / 1000.0;
+            if (positioning) {
+              const double sc = (qm - centre) / half;
+              C(e, 1) = d.gp(e, idx) * sc * sc;
+              C(e, 2) = d.gp(e, idx) * sc * sc * sc;
+            }
           }
           return C;
         };
         const std::string unit = angular ? "urad_per_m" : "um_per_m";
-        lin.report = [k, name, unit, effect](const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov, double, double,
-                                             Finding& f) {
+        lin.report = [k, name, unit, effect, positioning](const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov,
+                                                          double, double, Finding& f) {
           f.parameters = {{"error", name}, {unit, num(beta[0])}};
           f.std_errors = {{unit, std::sqrt(cov(0, 0))}};
-          f.explanation = fmt::format("{} of {} grows linearly along {}: {} {:.3g} {} missing from the baseline.",
-                                      name, axis_str(k), axis_str(k), effect, beta[0], unit);
+          if (positioning) {
+            f.parameters.push_back({"quadratic_um", num(beta[1])});
+            f.parameters.push_back({"cubic_um", num(beta[2])});
+            f.std_errors.push_back({"quadratic_um", std::sqrt(cov(1, 1))});
+            f.std_errors.push_back({"cubic_um", std::sqrt(cov(2, 2))});
+            f.explanation = fmt::format(
+                "The positioning error {} of {} is missing from the baseline: {:.3g} um per m of travel (scale), "
+                "with {:.3g} um quadratic and {:.3g} um cubic curvature at the ends of the travel.",
+                name, axis_str(k), beta[0], beta[1], beta[2]);
+          } else {
+            f.explanation = fmt::format("{} of {} grows linearly along {}: {} {:.3g} {} missing from the baseline.",
+                                        name, axis_str(k), axis_str(k), effect, beta[0], unit);
+          }
         };
         lin.plot_x = [&d, k](int i) { return d.q_user(k, i); };
         lin.plot_label = position_name(k);
@@ -1459,8 +1478,10 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
       for (const Fitted& g : fits) {
         if (&g == &f) continue;
         if (g.cand->effect == f.cand->effect && g.cand->axis == f.cand->axis) continue;
-        const double gain_g = mo.rss - g.gain.rss;
-        if (gain_g < kConfoundGainShare * gain_best) continue;
+        // Nearly as good by the same measure (BIC within the selection margin)
+        // and the same structure (fitted deviations correlated).
+        if (g.bic - f.bic > -kMinDeltaBic) continue;
+        if (mo.rss - g.gain.rss < kConfoundGainShare * gain_best) continue;
         if (f.gain.fitted.size() == 0) f.gain = profile(d, mo, f.block, true);
         const Eigen::VectorXd g_fitted = profile(d, mo, g.block, true).fitted;
         const double rho = correlation(f.gain.fitted, g_fitted);

@@ -8,6 +8,7 @@
 // reported as such; the real ISO 230-2 data (tests/data/ecmc-b02); the HTML
 // report loads in headless Chromium without console errors.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -19,6 +20,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "core/error_model.h"
+#include "core/errors_csv.h"
 #include "core/explain.h"
 #include "core/machine_json.h"
 #include "core/recordings.h"
@@ -197,6 +200,55 @@ TEST(ExplainSamples, RotaryPositioningFiveAxisFixedBaseline) {
   EXPECT_NEAR(angle_diff(param(f, "phase_deg"), truth.at("phase_deg").get<double>()), 0.0, 10.0);
 }
 
+TEST(ExplainSamples, FixedBaselineLackingTheXTableReportsItsPositioningError) {
+  // The null recording against a baseline without the component errors of X:
+  // explain must name the missing geometry (scale of X, EXX) and its curve
+  // must follow what the missing table does to ex, computed here with the
+  // exact model (both files), up to the instrument's constant.
+  const std::string full_path = "samples/recordings/geometry-3axis.csv";
+  std::istringstream full_text(slurp(test::source_path(full_path)));
+  std::string no_x, line;
+  bool skipping = false;
+  while (std::getline(full_text, line)) {
+    if (line.rfind("X,", 0) == 0) skipping = true;
+    if (skipping && line.empty()) {
+      skipping = false;
+      continue;
+    }
+    if (!skipping) no_x += line + "\n";
+  }
+  const std::string no_x_path = temp_path("geometry-no-x.csv");
+  std::ofstream(no_x_path) << no_x;
+  const std::string out = temp_path("no_x.json");
+  const test::CliResult r = test::run_volmap("explain --recordings " + test::source_path("samples/recordings/null.csv") +
+                                             " --machine " + test::source_path(kM3) + " --baseline " + no_x_path +
+                                             " --json " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json res = json::parse(slurp(out));
+  ASSERT_FALSE(res.at("findings").empty()) << res.dump(1);
+  const json& f = res.at("findings").at(0);
+  EXPECT_EQ(f.at("effect"), "scale");
+  EXPECT_EQ(f.at("axis"), "X");
+  EXPECT_EQ(f.at("parameters").at("error"), "EXX");
+
+  const Machine m = load_machine_json(test::source_path(kM3));
+  const ErrorModel with(m, load_errors_csv(test::source_path(full_path)));
+  std::istringstream no_x_in(no_x);
+  const ErrorModel without(m, read_errors_csv(no_x_in, "no-x.csv"));
+  std::vector<double> diff, fitted;
+  for (double x = 0; x <= 500; x += 25) {
+    AxisVector u(3);
+    u << x, 200, 150;
+    diff.push_back((with.exact(u).dP_mm.x() - without.exact(u).dP_mm.x()) * 1e3);
+    const double sc = (x - 250) / 250;
+    fitted.push_back(param(f, "um_per_m") * x / 1000 + param(f, "quadratic_um") * sc * sc +
+                     param(f, "cubic_um") * sc * sc * sc);
+  }
+  double offset = 0;
+  for (std::size_t i = 0; i < diff.size(); ++i) offset += (diff[i] - fitted[i]) / static_cast<double>(diff.size());
+  for (std::size_t i = 0; i < diff.size(); ++i) EXPECT_NEAR(fitted[i] + offset, diff[i], 0.6) << "X " << 25 * i;
+}
+
 // ------------------------------------------------- no effect, confounding --
 
 TEST(ExplainNull, ThreeAxisLaserRunGivesNoFinding) {
@@ -282,6 +334,42 @@ TEST(ExplainRealData, EcmcStageReversalMatchesIso230AndHoldsUp) {
     EXPECT_NEAR(param(top, "value_um"), iso_reversal(rec, a),
                 std::max(0.05, 2.0 * top.at("std_errors").at("value_um").get<double>()));
     EXPECT_LT(top.at("heldout_rms_after_um").get<double>(), top.at("heldout_rms_before_um").get<double>());
+  }
+  // X: a steady drift; independently, the slope of the run means (each run
+  // is balanced in targets and directions) against the run's mean time.
+  {
+    const std::string path = "tests/data/ecmc-b02/x_recordings.csv";
+    const json x = run_explain(path, "");
+    const Recordings rec = load_recordings_csv(test::source_path(path));
+    std::map<int, std::array<double, 3>> runs;  // sum t, sum e, count
+    for (std::size_t i = 0; i < rec.size(); ++i) {
+      auto& a = runs[rec.run[i]];
+      a[0] += rec.t_s[i];
+      a[1] += rec.e_um[0][i];
+      a[2] += 1;
+    }
+    double mt = 0, me = 0;
+    for (const auto& [r, a] : runs) {
+      mt += a[0] / a[2];
+      me += a[1] / a[2];
+    }
+    mt /= static_cast<double>(runs.size());
+    me /= static_cast<double>(runs.size());
+    double stt = 0, ste = 0;
+    for (const auto& [r, a] : runs) {
+      stt += (a[0] / a[2] - mt) * (a[0] / a[2] - mt);
+      ste += (a[0] / a[2] - mt) * (a[1] / a[2] - me);
+    }
+    const double slope_um_per_h = ste / stt * 3600.0;
+    bool drift = false;
+    for (const json& f : x.at("findings"))
+      if (f.at("effect") == "thermal_drift" && f.at("parameters").contains("rate_um_per_h")) {
+        drift = true;
+        EXPECT_EQ(f.at("axis"), "X");
+        EXPECT_NEAR(param(f, "rate_um_per_h"), slope_um_per_h, 0.3 * std::abs(slope_um_per_h));
+        EXPECT_LT(f.at("heldout_rms_after_um").get<double>(), f.at("heldout_rms_before_um").get<double>());
+      }
+    EXPECT_TRUE(drift) << x.dump(1);
   }
   // Y: the runs drift apart monotonically (no time column: drift and set-up cannot be told by time).
   const json y = run_explain("tests/data/ecmc-b02/y_recordings.csv", "");
