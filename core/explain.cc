@@ -744,6 +744,9 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
     }
     res.findings.push_back(std::move(f));
   }
+  if (opt.machine_assumed && !ctx.rotary.empty())
+    res.notes.push_back("no --machine: the rotary axes were taken to turn the workpiece about lines through the "
+                        "origin along X, Y or Z; give the machine that made the recording for rotary findings");
   for (const std::string& s : not_estimable)
     res.notes.push_back(s + ": not estimable on this recording (the baseline already spans its columns)");
   return res;

@@ -63,6 +63,7 @@ struct ExplainOptions {
   /// as ISO 230-2 evaluates positioning; cubic for denser sampling).
   int degree = 0;
   int max_findings = 6;
+  bool machine_assumed = false;        ///< the machine is cartesian_machine_for(rec) (no --machine)
 };
 
 /// Where the baseline residuals have structure: strength is the adjusted

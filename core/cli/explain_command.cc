@@ -52,6 +52,7 @@ Runner register_explain(CLI::App& app) {
     const Machine m = o->machine.empty() ? cartesian_machine_for(rec) : load_machine_json(o->machine);
     ExplainOptions opt;
     opt.degree = o->degree;
+    opt.machine_assumed = o->machine.empty();
     ErrorSet baseline;
     if (!o->baseline.empty()) {
       baseline = load_errors_csv(o->baseline);
