@@ -248,14 +248,15 @@ std::vector<Candidate> make_candidates(const Context& c) {
           Eigen::MatrixXd C(n, 1);
           for (Eigen::Index e = 0; e < n; ++e) {
             const int i = d.row[static_cast<std::size_t>(e)];
-            C(e, 0) = pk[e] * factor(i) * (*values)[static_cast<std::size_t>(i)];
+            // ISO 1 reference temperature: 20 degC (matters for kind scale).
+            C(e, 0) = pk[e] * factor(i) * ((*values)[static_cast<std::size_t>(i)] - 20.0);
           }
           return C;
         };
         const std::string sensor = tc.name.substr(5, tc.name.size() - 7);
         temp.report = [k, kind, sensor](const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov, double, double,
                                         Finding& f) {
-          f.parameters = {{"kind", kind}, {"um_per_k", num(beta[0])}, {"sensor", sensor}};
+          f.parameters = {{"kind", kind}, {"um_per_k", num(beta[0])}, {"sensor", sensor}, {"reference_c", 20}};
           if (kind == "scale") f.parameters.push_back({"reference_length_mm", 1000});
           f.std_errors = {{"um_per_k", std::sqrt(cov(0, 0))}};
           f.explanation = fmt::format(

@@ -134,6 +134,16 @@ TEST(ExplainSamples, ThermalDriftUnderGeometryFixedBaselineProjectionForm) {
   EXPECT_EQ(res.at("mismatch").at(0).at("component"), "e");  // projection form
 }
 
+TEST(ExplainSamples, ThermalExpansionAgainstATemperatureColumn) {
+  const json truth = truth_of("thermal-temperature");
+  const json res = run_explain("samples/recordings/thermal-temperature.csv", kM3, "samples/errors/hsu-3axis.csv");
+  const json& f = expect_single_finding(res, truth);
+  ASSERT_FALSE(f.empty());
+  EXPECT_EQ(f.at("parameters").at("kind"), truth.at("kind"));
+  EXPECT_EQ(f.at("parameters").at("sensor"), truth.at("sensor"));
+  EXPECT_NEAR(param(f, "um_per_k"), truth.at("um_per_k").get<double>(), 1.2);  // 10 %
+}
+
 TEST(ExplainSamples, CyclicUnderNoiseFittedBaseline) {
   const json truth = truth_of("cyclic");
   const json res = run_explain("samples/recordings/cyclic.csv", kM3);

@@ -29,6 +29,7 @@ sim reversal-one-feed   $m3 $g3
 # fixed baseline (explain --baseline samples/errors/...): concealed under the full sample errors
 sim thermal-drift       $m3 samples/errors/hsu-3axis.csv
 sim servo-lag           $m3 samples/errors/hsu-3axis.csv
+sim thermal-temperature $m3 samples/errors/hsu-3axis.csv
 sim sag                 $m3 samples/errors/hsu-3axis.csv
 sim rotary-wobble       $m5 samples/errors/lei-hsu-xyzac.csv
 sim rotary-positioning  $m5 samples/errors/lei-hsu-xyzac.csv
