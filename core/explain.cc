@@ -26,7 +26,7 @@ namespace {
 using namespace explain_detail;
 
 constexpr double kMinDeltaBic = -10.0;     ///< a step must lower BIC by more than 10
-constexpr double kMinHeldoutGain = 0.02;   ///< and the held-out RMS by more than 2 %
+constexpr double kMinHeldoutGain = 0.05;   ///< and the held-out RMS by more than 5 %
 constexpr double kAbsorbed = 1e-3;         ///< residual share of a column the model spans
 constexpr double kConfoundCorrelation = 0.98;
 constexpr double kConfoundGainShare = 0.9;
