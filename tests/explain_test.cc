@@ -25,6 +25,8 @@
 #include "core/explain.h"
 #include "core/machine_json.h"
 #include "core/recordings.h"
+#include "core/simulate.h"
+#include "tests/support/plans.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/test_paths.h"
 
@@ -273,6 +275,31 @@ TEST(ExplainNull, FiveAxisProbeBallGivesNoFindingInBothModes) {
   EXPECT_TRUE(fitted.at("findings").empty()) << fitted.at("findings").dump(1);
   const json fixed = run_explain("samples/recordings/null-5axis.csv", kM5, "samples/recordings/geometry-5axis.csv");
   EXPECT_TRUE(fixed.at("findings").empty()) << fixed.at("findings").dump(1);
+}
+
+/// The null plan of a sample with another noise seed, simulated in memory.
+Recordings reseeded_null(const Machine& m, const std::string& plan_name, const std::string& geometry, int seed) {
+  json plan = json::parse(slurp(test::source_path("samples/recordings/" + plan_name)));
+  plan["seed"] = seed;
+  const ErrorModel model(m, load_errors_csv(test::source_path(geometry)));
+  Recordings rec = simulate(model, test::plan_from_text(plan.dump(), m), nullptr);
+  rec.file = plan_name + " seed " + std::to_string(seed);
+  return rec;
+}
+
+TEST(ExplainNull, NoFalseFindingOverOtherNoiseSeeds) {
+  // Six more noise draws of each null recording (fitted baseline): any
+  // finding is a false discovery.
+  const Machine m3 = load_machine_json(test::source_path(kM3));
+  const Machine m5 = load_machine_json(test::source_path(kM5));
+  for (int seed = 1001; seed <= 1006; ++seed) {
+    const ExplainResult r3 =
+        explain(m3, reseeded_null(m3, "null.plan.json", "samples/recordings/geometry-3axis.csv", seed), {});
+    EXPECT_TRUE(r3.findings.empty()) << "3-axis seed " << seed << ": " << r3.findings.front().effect;
+    const ExplainResult r5 =
+        explain(m5, reseeded_null(m5, "null-5axis.plan.json", "samples/recordings/geometry-5axis.csv", seed), {});
+    EXPECT_TRUE(r5.findings.empty()) << "5-axis seed " << seed << ": " << r5.findings.front().effect;
+  }
 }
 
 TEST(ExplainConfounded, OneDirectionSweepWithDriftIsConfoundedNotGuessed) {
