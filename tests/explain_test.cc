@@ -119,6 +119,8 @@ TEST(ExplainSamples, ReversalUnderNoiseFittedBaseline) {
     (s > 0 ? np : nm) += 1;
   }
   EXPECT_NEAR(param(f, "value_um"), sp / np - sm / nm, 0.3);
+  // Locate: the approach direction is where the structure is.
+  EXPECT_EQ(res.at("mismatch").at(0).at("regressor"), "dir_x");
 }
 
 TEST(ExplainSamples, ThermalDriftUnderGeometryFixedBaselineProjectionForm) {
@@ -177,6 +179,8 @@ TEST(ExplainSamples, SagUnderGeometryFixedBaselineVectorForm) {
   EXPECT_NEAR(param(f, "coefficient"), truth.at("coefficient").get<double>(),
               0.15 * std::abs(truth.at("coefficient").get<double>()));
   EXPECT_NEAR(param(f, "origin"), truth.at("origin").get<double>(), 15.0);
+  EXPECT_EQ(res.at("mismatch").at(0).at("component"), "ez");
+  EXPECT_EQ(res.at("mismatch").at(0).at("regressor"), "x_mm");
 }
 
 TEST(ExplainSamples, SetupShiftBetweenRunsFittedBaseline) {
@@ -199,6 +203,7 @@ TEST(ExplainSamples, RotaryWobbleFiveAxisFixedBaseline) {
   ASSERT_FALSE(f.empty());
   EXPECT_EQ(f.at("parameters").at("order").get<int>(), truth.at("order").get<int>());
   EXPECT_NEAR(param(f, "amplitude_urad"), truth.at("amplitude_urad").get<double>(), 2.0);  // 10 %
+  EXPECT_EQ(res.at("mismatch").at(0).at("regressor"), "c_deg");
   EXPECT_NEAR(angle_diff(param(f, "phase_deg"), truth.at("phase_deg").get<double>()), 0.0, 10.0);
 }
 
@@ -421,6 +426,34 @@ TEST(ExplainRealData, EcmcStageReversalMatchesIso230AndHoldsUp) {
 }
 
 // ------------------------------------------------------------- interface --
+
+TEST(ExplainCli, JsonHasEveryKeyOfTheSpec) {
+  // shared/spec/explain.md: keys that must be present, effect names of its table.
+  const std::set<std::string> names{"reversal", "thermal_drift", "cyclic", "servo_lag", "sag", "setup_shift",
+                                    "rotary_wobble", "rotary_positioning", "squareness", "straightness", "scale",
+                                    "angular"};
+  for (const char* name : {"reversal", "setup-shift", "drift-one-direction", "reversal-one-feed"}) {
+    SCOPED_TRACE(name);
+    const json r = run_explain(std::string("samples/recordings/") + name + ".csv", kM3);
+    EXPECT_EQ(r.at("format"), "volmap-explain/1");
+    EXPECT_TRUE(r.at("observations").is_number_unsigned());
+    for (const char* k : {"description", "rms_um", "heldout_rms_um"}) EXPECT_TRUE(r.at("baseline").contains(k)) << k;
+    for (const json& m : r.at("mismatch"))
+      for (const char* k : {"component", "regressor", "where", "strength"}) EXPECT_TRUE(m.contains(k)) << k;
+    for (const json& f : r.at("findings")) {
+      for (const char* k : {"effect", "axis", "parameters", "std_errors", "rms_before_um", "rms_after_um",
+                            "heldout_rms_before_um", "heldout_rms_after_um", "evidence", "explanation"})
+        EXPECT_TRUE(f.contains(k)) << k;
+      EXPECT_TRUE(f.at("evidence").contains("delta_bic"));
+      EXPECT_TRUE(names.count(f.at("effect").get<std::string>())) << f.at("effect");
+    }
+    for (const json& c : r.at("confounded")) {
+      for (const char* k : {"effects", "axis", "explanation", "remedy"}) EXPECT_TRUE(c.contains(k)) << k;
+      for (const json& e : c.at("effects")) EXPECT_TRUE(names.count(e.get<std::string>())) << e;
+    }
+    for (const char* k : {"rms_um", "heldout_rms_um"}) EXPECT_TRUE(r.at("final").contains(k)) << k;
+  }
+}
 
 TEST(ExplainCli, SameInputsGiveTheSameBytes) {
   const std::string a = temp_path("det_a.json"), b = temp_path("det_b.json");
