@@ -23,6 +23,7 @@
 #include "core/error_model.h"
 #include "core/errors_csv.h"
 #include "core/explain.h"
+#include "core/identify.h"
 #include "core/machine_json.h"
 #include "core/recordings.h"
 #include "core/simulate.h"
@@ -483,6 +484,25 @@ TEST(ExplainCli, BadInputNamesFileAndLineAndWritesNothing) {
   const test::CliResult same = test::run_volmap("explain --recordings " + bad + " --json " + bad);
   EXPECT_NE(same.status, 0);
   EXPECT_EQ(test::run_volmap("explain").status, 2);  // usage
+}
+
+TEST(ExplainLibrary, FittedBaselineAgreesWithIdentify) {
+  // The fitted rigid-body baseline is the linearised model of `volmap
+  // identify`: on a single run (identify's per-run setup offsets = explain's
+  // constant per component) with the X positioning error as a cubic, both
+  // leave the same residual and see the same rank.
+  const Machine m = load_machine_json(test::source_path(kM3));
+  const Recordings rec = load_recordings_csv(test::source_path("samples/recordings/drift-one-direction.csv"));
+  IdentifyOptions io;
+  io.components = {{"EXX", 3}};
+  io.setup_offsets = true;
+  const IdentifyResult id = identify(m, rec, io);
+  ExplainOptions eo;
+  eo.degree = 3;
+  const ExplainResult ex = explain(m, rec, eo);
+  EXPECT_NEAR(ex.baseline_rms_um, id.rms_after_um, 1e-4);
+  EXPECT_NE(ex.baseline_description.find(std::to_string(id.rank) + " of "), std::string::npos)
+      << ex.baseline_description << " vs rank " << id.rank;
 }
 
 TEST(ExplainLibrary, CartesianMachineHasTheRecordedAxes) {
