@@ -2,6 +2,7 @@
 // regressor the recording holds (docs/explain.md, "Locate").
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -18,7 +19,66 @@ struct Regressor {
   std::vector<double> value;  ///< per recording row (NaN: not recorded)
   bool categorical = false;
   std::function<std::string(double lo, double hi, double mean_um)> where;
+  std::string periodic_unit;  ///< non-empty: also scan the residual for a period along it ("mm")
 };
+
+/// Strength of the best sine along x (pairs sorted by x): the share of the
+/// variance a (sin, cos) pair of the best period explains, less 2 ln(M) / n
+/// for having chosen the best of M periods (the expected maximum under
+/// noise). Periods: 2.2 x the median spacing of the targets .. span / 3.
+std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, double>>& xv, double sst,
+                                           const std::string& component, const Regressor& reg) {
+  std::vector<double> xs, sum, cnt;
+  for (const auto& [x, r] : xv) {
+    if (xs.empty() || x - xs.back() > 1e-9) {
+      xs.push_back(x);
+      sum.push_back(0);
+      cnt.push_back(0);
+    }
+    sum.back() += r;
+    cnt.back() += 1;
+  }
+  if (xs.size() < 16) return std::nullopt;
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < xs.size(); ++i) gaps.push_back(xs[i] - xs[i - 1]);
+  std::sort(gaps.begin(), gaps.end());
+  const double span = xs.back() - xs.front(), p_min = 2.2 * gaps[gaps.size() / 2], p_max = span / 3.0;
+  if (!(p_max > 1.5 * p_min)) return std::nullopt;
+  double m_all = 0;
+  for (const auto& p : xv) m_all += p.second;
+  m_all /= static_cast<double>(xv.size());
+  const double f_lo = 1.0 / p_max, f_hi = 1.0 / p_min, df = std::max(1.0 / (4.0 * span), (f_hi - f_lo) / 600.0);
+  double best = 0, best_period = 0, best_amp = 0;
+  int count = 0;
+  for (double f = f_lo; f <= f_hi; f += df, ++count) {
+    double ss = 0, cc = 0, sc = 0, sr = 0, cr = 0;
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+      const double ph = 2 * kPi * f * xs[i], sn = std::sin(ph), cs = std::cos(ph);
+      const double r = sum[i] - cnt[i] * m_all;
+      ss += cnt[i] * sn * sn;
+      cc += cnt[i] * cs * cs;
+      sc += cnt[i] * sn * cs;
+      sr += r * sn;
+      cr += r * cs;
+    }
+    const double det = ss * cc - sc * sc;
+    if (!(det > 1e-12 * ss * cc)) continue;
+    const double a = (cc * sr - sc * cr) / det, b = (ss * cr - sc * sr) / det;
+    const double gain = a * sr + b * cr;
+    if (gain > best) {
+      best = gain;
+      best_period = 1.0 / f;
+      best_amp = std::hypot(a, b);
+    }
+  }
+  const double n = static_cast<double>(xv.size());
+  const double strength = best / sst - 2.0 * std::log(std::max(count, 1)) / n;
+  if (strength < 0.05) return std::nullopt;
+  return Mismatch{component, reg.name + " (periodic)",
+                  fmt::format("a period of {:.4g} {} along {}: amplitude {:.3g} um", best_period, reg.periodic_unit,
+                              reg.name, best_amp),
+                  std::min(1.0, strength)};
+}
 
 std::vector<Mismatch> locate(const Data& d, const Eigen::VectorXd& r_um, const std::vector<Regressor>& regs) {
   std::vector<Mismatch> out;
@@ -76,6 +136,8 @@ std::vector<Mismatch> locate(const Data& d, const Eigen::VectorXd& r_um, const s
         }
       }
       if (sstot <= 0) continue;
+      if (!reg.periodic_unit.empty())
+        if (std::optional<Mismatch> p = periodic_structure(xv, sstot, kGroupName[g], reg)) out.push_back(*p);
       const double nn = static_cast<double>(xv.size());
       const double adj = 1.0 - ((sstot - ssb) / (nn - static_cast<double>(k))) / (sstot / (nn - 1));
       if (adj < 0.05) continue;
@@ -102,6 +164,7 @@ std::vector<Regressor> regressors(const Data& d) {
       return fmt::format("{} {:.4g}..{:.4g} {}: mean residual {:+.3g} um (the region that departs most)",
                          axis_str(a), lo, hi, unit, m);
     };
+    if (!is_rotary(a)) pos.periodic_unit = "mm";
     regs.push_back(pos);
     if (!rec.dir[static_cast<std::size_t>(a)].empty()) {
       Regressor dir;

@@ -158,6 +158,8 @@ TEST(ExplainSamples, CyclicUnderNoiseFittedBaseline) {
   EXPECT_NEAR(param(f, "period_mm"), truth.at("period_mm").get<double>(), 0.01 * truth.at("period_mm").get<double>());
   EXPECT_NEAR(param(f, "amplitude_um"), truth.at("amplitude_um").get<double>(), 0.25);
   EXPECT_NEAR(angle_diff(param(f, "phase_deg"), truth.at("phase_deg").get<double>()), 0.0, 15.0);
+  // Locate: binned means cannot see 30 periods over the travel; the periodic scan does.
+  EXPECT_EQ(res.at("mismatch").at(0).at("regressor"), "x_mm (periodic)");
 }
 
 TEST(ExplainSamples, ServoLagAtThreeFeedsFixedBaseline) {
@@ -273,6 +275,7 @@ TEST(ExplainNull, ThreeAxisLaserRunGivesNoFinding) {
   const json res = run_explain("samples/recordings/null.csv", kM3);
   EXPECT_TRUE(res.at("findings").empty()) << res.at("findings").dump(1);
   EXPECT_TRUE(res.at("confounded").empty());
+  EXPECT_TRUE(res.at("mismatch").empty()) << res.at("mismatch").dump(1);
   EXPECT_DOUBLE_EQ(res.at("final").at("rms_um").get<double>(), res.at("baseline").at("rms_um").get<double>());
 }
 
