@@ -628,8 +628,8 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
         Confounded c;
         c.effects = {f.cand->effect, g.cand->effect};
         c.axis = f.cand->axis;
-        const std::string fa = f.cand->axis ? axis_str(*f.cand->axis) : "";
-        const std::string ga = g.cand->axis ? axis_str(*g.cand->axis) : "";
+        const std::string fa = f.cand->axis ? axis_str(*f.cand->axis) : "-";
+        const std::string ga = g.cand->axis ? axis_str(*g.cand->axis) : "-";
         c.explanation = fmt::format(
             "{} {} and {} {} explain the same structure on this recording (fitted deviations correlated {:.3f}, "
             "RMS {:.3g} vs {:.3g} um): the recording cannot tell them apart",
