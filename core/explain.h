@@ -21,7 +21,7 @@
 //     reversal K            p_b[K] s_K / 2                        value_um
 //     thermal_drift K       p_b[K] f(t) (offset) or p_b[K] f(t) q_K / 1000 (scale),
 //                           f = 1 - exp(-t/tau_s) (tau_s by scan + golden section),
-//                           t / 3600 (rate) or T_sensor (um_per_k)
+//                           t / 3600 (rate) or T_sensor - 20 degC (um_per_k)
 //     cyclic K              p_b[K] (sin, cos)(2 pi q_K / period_mm)  (period by scan + refine)
 //     servo_lag K           -p_b[K] (F / 1000) s_K                 um_per_m_min
 //     sag K from J          p_b[K] (q_J - c)^2, p_b[K] (q_J - c)   coefficient, origin
@@ -31,14 +31,14 @@
 //     fixed baseline only:  scale / squareness / straightness / angular of each linear axis
 //
 // Selection: forward, one effect per step; a step must lower BIC by more than
-// kMinDeltaBic and, when the recording has two runs or more, lower the
-// leave-one-run-out RMS by more than kMinHeldoutGain (relative). Candidates
-// whose columns the current model already spans are not estimable here;
-// candidates that explain the same structure as the best one (fitted values
-// correlated > 0.98, nearly the same gain) are reported as `confounded`,
-// not as a finding. A recording whose time rises with an axis position in
-// every run (one-direction sweeps) confounds thermal drift with scale by
-// design; that is reported whatever the residuals show.
+// 10 and, when the recording has two runs or more, lower the leave-one-run-out
+// RMS by more than 5 %. Candidates whose columns the current model already
+// spans are not estimable here; candidates that explain the same structure as
+// the best one (fitted values correlated > 0.98, a BIC within the selection
+// margin) are reported as `confounded`, not as a finding. A recording whose
+// time rises with an axis position in every run (one-direction sweeps)
+// confounds thermal drift with scale by design; that is reported whatever the
+// residuals show.
 #pragma once
 
 #include <map>
