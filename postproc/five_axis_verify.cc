@@ -30,8 +30,9 @@ struct NominalMove {
 
 class Accumulator {
  public:
-  void add(double dev_mm, double dev_rad, int line) {
+  void add(double path_mm, double dev_mm, double dev_rad, int line) {
     const double um = dev_mm * 1e3, urad = dev_rad * 1e6;
+    d_.profile.add(path_mm, um, urad, line);
     if (um > d_.max_um || d_.samples == 0) {
       d_.max_um = std::max(d_.max_um, um);
       d_.worst_line = line;
@@ -134,6 +135,7 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
   {
     FiveAxisReader reader(nominal, nominal_name, machine, options.form, options.initial);
     Accumulator acc;
+    double path_mm = 0.0;  // tip travel of the feed moves so far
     AxisVector prev = mach.home;
     if (options.initial.q.size() == mach.axis_count())
       for (int k = 0; k < mach.axis_count(); ++k)
@@ -161,8 +163,9 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
           prev = u;
           const ToolPose a = v.tf_.actual(u);
           const auto [d, ang] = v.deviation(n, a);
-          acc.add(d, ang, l.line);
+          acc.add(path_mm + n.length_mm * i / count, d, ang, l.line);
         }
+        path_mm += n.length_mm;
         moves.push_back(n);
       } catch (const InputError&) {
         throw;
@@ -176,6 +179,7 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
   {
     FiveAxisReader reader(compensated, compensated_name, machine, InputForm::kMachineAxes, InitialPose{});
     Accumulator acc;
+    double path_mm = 0.0;
     AxisVector u_prev = mach.home;
     bool known = false;
     size_t cursor = 0;
@@ -196,7 +200,8 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
         double rot = 0;
         for (int k = 0; k < mach.axis_count(); ++k)
           if (is_rotary(mach.axis_order[static_cast<size_t>(k)])) rot = std::max(rot, std::abs(u1[k] - u_prev[k]));
-        const int count = v.samples_for((p1.tip_mm - p0.tip_mm).norm(), rot);
+        const double chord_mm = (p1.tip_mm - p0.tip_mm).norm();
+        const int count = v.samples_for(chord_mm, rot);
         for (int i = 1; i <= count; ++i) {
           const AxisVector u = u_prev + (static_cast<double>(i) / count) * (u1 - u_prev);
           const ToolPose a = v.tf_.actual(u);
@@ -227,8 +232,9 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
               best_ang = std::min(best_ang, v.min_angle(moves[k].m, a.axis));
           }
           cursor = best_k;
-          acc.add(best, best_ang, l.line);
+          acc.add(path_mm + chord_mm * i / count, best, best_ang, l.line);
         }
+        path_mm += chord_mm;
       } catch (const InputError&) {
         throw;
       } catch (const std::exception& e) {

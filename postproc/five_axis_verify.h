@@ -20,6 +20,7 @@
 #include <string>
 
 #include "core/error_model.h"
+#include "postproc/deviation_profile.h"
 #include "postproc/five_axis_input.h"
 
 namespace volmap::post {
@@ -30,6 +31,7 @@ struct FiveAxisDeviation {
   std::uint64_t samples = 0;
   int worst_line = 0;        ///< program line of the largest tip deviation
   int worst_angle_line = 0;  ///< program line of the largest axis deviation
+  DeviationProfile profile;  ///< along the tip path, for verify --report
 };
 
 struct FiveAxisVerifyResult {

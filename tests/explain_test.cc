@@ -28,6 +28,7 @@
 #include "core/recordings.h"
 #include "core/simulate.h"
 #include "tests/support/plans.h"
+#include "tests/support/browser.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/test_paths.h"
 
@@ -519,21 +520,6 @@ TEST(ExplainLibrary, CartesianMachineHasTheRecordedAxes) {
 
 // ------------------------------------------------------------------ report --
 
-bool have_chromium() { return std::system("command -v chromium >/dev/null 2>&1") == 0; }
-
-/// Loads a page in headless Chromium; returns the DOM and the console lines.
-void load_in_chromium(const std::string& html, std::string& dom, std::string& console) {
-  const std::string dom_file = html + ".dom", log_file = html + ".log";
-  const std::string cmd = "timeout 120 chromium --headless --disable-gpu --no-sandbox --enable-logging=stderr --v=0 "
-                          "--dump-dom file://" + html + " >" + dom_file + " 2>" + log_file;
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  dom = slurp(dom_file);
-  std::istringstream log(slurp(log_file));
-  console.clear();
-  for (std::string line; std::getline(log, line);)
-    if (line.find(":CONSOLE") != std::string::npos || line.find("Uncaught") != std::string::npos) console += line + "\n";
-}
-
 TEST(ExplainReport, SelfContainedHtmlLoadsInChromiumWithoutConsoleErrors) {
   const std::string html = temp_path("report.html");
   const test::CliResult r = test::run_volmap(
@@ -547,22 +533,11 @@ TEST(ExplainReport, SelfContainedHtmlLoadsInChromiumWithoutConsoleErrors) {
   EXPECT_EQ(page.find("http://"), std::string::npos);  // no network (the SVG namespace is https-free below)
   EXPECT_EQ(page.find("https://"), std::string::npos);
 
-  if (!have_chromium()) {
-    const char* req = std::getenv("VOLMAP_REQUIRE_CHROMIUM");
-    if (req && std::string(req) == "1") FAIL() << "chromium is required (VOLMAP_REQUIRE_CHROMIUM=1) but missing";
-    GTEST_SKIP() << "chromium not installed";
-  }
+  if (!test::chromium_or_skip()) GTEST_SKIP() << "chromium not installed";
   // Positive control: the check sees a console error when there is one.
-  const std::string bad = temp_path("bad.html");
-  {
-    std::ofstream o(bad);
-    o << "<!DOCTYPE html><html><body><script>undefined_function();</script></body></html>\n";
-  }
+  test::expect_console_check_sees_errors(temp_path("bad.html"));
   std::string dom, console;
-  load_in_chromium(bad, dom, console);
-  EXPECT_FALSE(console.empty()) << "the console check does not see errors";
-
-  load_in_chromium(html, dom, console);
+  test::load_in_chromium(html, dom, console);
   EXPECT_TRUE(console.empty()) << console;
   EXPECT_NE(dom.find("<svg"), std::string::npos);
   EXPECT_NE(dom.find("reversal"), std::string::npos);

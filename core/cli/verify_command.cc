@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/atomic_file.h"
 #include "core/cli/commands.h"
 #include "core/cli/five_axis_options.h"
 #include "core/cli/program_setup.h"
@@ -15,14 +16,50 @@
 #include "core/machine_json.h"
 #include "postproc/five_axis_verify.h"
 #include "postproc/verify.h"
+#include "postproc/verify_report.h"
 
 namespace volmap::cli {
 namespace {
+
+// --report: opened before the work (an output onto an input is refused
+// before anything runs), committed after it.
+template <typename Opts>
+std::unique_ptr<AtomicOutput> open_report(const Opts& o) {
+  if (o.report.empty()) return nullptr;
+  return std::make_unique<AtomicOutput>(o.report, std::vector<std::string>{o.machine, o.errors, o.nominal, o.program});
+}
+
+template <typename Stats>
+post::VerifyReportRun report_run(const char* label, const std::string& program, const Stats& s) {
+  post::VerifyReportRun r;
+  r.label = label;
+  r.program = program;
+  r.max_um = s.max_um;
+  r.rms_um = s.rms_um;
+  if constexpr (requires { s.max_urad; }) {
+    r.max_urad = s.max_urad;
+    r.rms_urad = s.rms_urad;
+  }
+  r.samples = s.samples;
+  r.worst_line = s.worst_line;
+  r.profile = &s.profile;
+  return r;
+}
+
+template <typename Opts, typename Result>
+void write_report(AtomicOutput* report, const Opts& o, const Machine& m, const Result& r, bool five_axis) {
+  if (!report) return;
+  post::VerifyReportInfo info{m.name, o.errors, five_axis};
+  report->stream() << post::verify_report_html(info, report_run("before", o.nominal, r.before),
+                                               report_run("after", o.program, r.after));
+  report->commit();
+}
 
 // Five axes: tip deviation (um) and tool-axis deviation (urad), before and
 // after (postproc/five_axis_verify.h).
 template <typename Opts>
 int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
+  const std::unique_ptr<AtomicOutput> report = open_report(o);
   std::ifstream a(o.nominal, std::ios::binary), b(o.program, std::ios::binary);
   if (!a) throw InputError(o.nominal, 0, "cannot open the nominal program; check the path");
   if (!b) throw InputError(o.program, 0, "cannot open the compensated program; check the path");
@@ -32,6 +69,7 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
   opt.initial = o.five.initial(m, o.placement);
   opt.outside = o.clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
   const post::FiveAxisVerifyResult r = post::verify_five_axis(a, o.nominal, b, o.program, m, e, opt);
+  write_report(report.get(), o, m, r, true);
   if (o.json) {
     nlohmann::ordered_json doc;
     auto stats = [](const post::FiveAxisDeviation& s) {
@@ -59,7 +97,7 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
 
 Runner register_verify(CLI::App& app) {
   struct Opts {
-    std::string machine, errors, errors_format = "auto", nominal, program;
+    std::string machine, errors, errors_format = "auto", nominal, program, report;
     ProgramSetupOptions placement;
     FiveAxisCliOptions five;
     double step_mm = 0.25;
@@ -78,8 +116,9 @@ Runner register_verify(CLI::App& app) {
   sub->add_option("--sample-step-mm", o->step_mm, "Largest distance between samples along a move (default 0.25; at least 8 per move)")->check(CLI::PositiveNumber);
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
+  sub->add_option("--report", o->report, "Also write a self-contained HTML page: the deviation along the whole path before and after, the worst lines");
   sub->footer("Example:\n  volmap verify --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
-              "      --work-offset 100,100,50 --nominal part.ngc --program part-compensated.ngc --json\n"
+              "      --work-offset 100,100,50 --nominal part.ngc --program part-compensated.ngc --json --report verify.html\n"
               "  volmap verify --machine samples/machines/lei-hsu-xyzac.json --errors samples/errors/lei-hsu-xyzac.csv \\\n"
               "      --nominal impeller-7bl-xyzac.ngc --program impeller-machine.ngc");
   return [o]() -> int {
@@ -87,6 +126,7 @@ Runner register_verify(CLI::App& app) {
     const ErrorSet e = load_errors(o->errors, parse_errors_format(o->errors_format));
     if (o->five.applies(m)) return run_five_axis(*o, o->five.place_part(m), e);
     const nc::ProgramSetup setup = o->placement.load(m);
+    const std::unique_ptr<AtomicOutput> report = open_report(*o);
     std::ifstream a(o->nominal, std::ios::binary), b(o->program, std::ios::binary);
     if (!a) throw InputError(o->nominal, 0, "cannot open the nominal program; check the path");
     if (!b) throw InputError(o->program, 0, "cannot open the compensated program; check the path");
@@ -94,6 +134,7 @@ Runner register_verify(CLI::App& app) {
     opt.sample_step_mm = o->step_mm;
     opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
     const post::VerifyResult r = post::verify_programs(a, o->nominal, b, o->program, m, e, setup, opt);
+    write_report(report.get(), *o, m, r, false);
     if (o->json) {
       nlohmann::ordered_json doc;
       auto stats = [](const post::DeviationStats& s) {
