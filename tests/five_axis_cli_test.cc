@@ -90,11 +90,11 @@ TEST(FiveAxisCli, ErrorsAreOneLineAndWriteNothing) {
   // Three-axis options do not apply; --five-axis needs rotary axes.
   const std::string ok = write_temp("ok.ngc", kTcp);
   r = run_volmap("post" + kMachine + kErrors + " --work-offset 1,2,3 " + ok + " -o " + out);
-  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.status, 2);  // usage: an option that does not apply
   EXPECT_NE(r.err.find("--part-origin"), std::string::npos) << r.err;
   r = run_volmap("post --machine " + sample("machines/hsu-3axis.json") + " --errors " +
                  sample("errors/hsu-3axis.csv") + " --five-axis " + ok + " -o " + out);
-  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("no rotary axes"), std::string::npos) << r.err;
   r = run_volmap("post" + kMachine + kErrors + " --input-form nonsense " + ok + " -o " + out);
   EXPECT_EQ(r.status, 2);

@@ -468,9 +468,14 @@ TEST(Cli, KinematicsErrorsAreOneLineWithStatus1Or2) {
     EXPECT_TRUE(r.out.empty()) << r.out;
   };
   const std::string m = machine_arg("lei-hsu-xyzac");
-  for (const std::string& bad : {m + " --forward 10,20,x,0,0", m + " --forward 10,20,30,0",
-                                 m + " --forward 10,20,30,60,0",  // A outside -100..30
-                                 m + " --backward 0,0,0,0,0,2",   // not a unit vector
+  // Option values that do not parse or do not fit the machine: usage (2).
+  for (const std::string& usage : {m + " --forward 10,20,x,0,0", m + " --forward 10,20,30,0",
+                                   m + " --forward 10,20,30,60,0"}) {  // A outside -100..30
+    const Result r = run(usage);
+    EXPECT_EQ(r.status, 2) << usage;
+    one_line(r);
+  }
+  for (const std::string& bad : {m + " --backward 0,0,0,0,0,2",   // not a unit vector
                                  m + " --backward 0,0,0,0,0,-1",  // unreachable
                                  m + " --backward 1,2,3",
                                  std::string("kinematics --machine /nonexistent.json --forward 0,0,0,0,0")}) {

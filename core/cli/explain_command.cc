@@ -47,7 +47,7 @@ Runner register_explain(CLI::App& app) {
     if (!o->json.empty()) refuse_output_equal_to_input(o->json, inputs);
     if (!o->report.empty()) refuse_output_equal_to_input(o->report, inputs);
     if (!o->json.empty() && o->json == o->report)
-      throw std::invalid_argument("--json and --report name the same file; give two files");
+      throw UsageError("--json and --report name the same file; give two files");
     const Recordings rec = load_recordings_csv(o->recordings);
     const Machine m = o->machine.empty() ? cartesian_machine_for(rec) : load_machine_json(o->machine);
     ExplainOptions opt;

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "core/cli/commands.h"
 #include "core/cli/parse_util.h"
 
 namespace volmap::cli {
@@ -33,14 +34,14 @@ void FiveAxisCliOptions::add_to(CLI::App& sub, bool post) {
 
 bool FiveAxisCliOptions::applies(const Machine& m) const {
   if (five_axis && !m.has_rotary_axes())
-    throw std::invalid_argument("--five-axis: machine \"" + m.name + "\" has no rotary axes");
+    throw UsageError("--five-axis: machine \"" + m.name + "\" has no rotary axes");
   return m.has_rotary_axes();
 }
 
 Machine FiveAxisCliOptions::place_part(Machine m) const {
   if (part_origin.empty()) return m;
   const std::vector<double> v = parse_numbers(part_origin, "--part-origin");
-  if (v.size() != 3) throw std::invalid_argument("--part-origin needs X,Y,Z (mm)");
+  if (v.size() != 3) throw UsageError("--part-origin needs X,Y,Z (mm)");
   m.workpiece_origin_mm = Eigen::Vector3d(v[0], v[1], v[2]);
   return m;
 }
@@ -49,7 +50,7 @@ post::InputForm FiveAxisCliOptions::form() const { return *post::parse_input_for
 
 post::InitialPose FiveAxisCliOptions::initial(const Machine& m, const ProgramSetupOptions& placement) const {
   if (!placement.work_offset.empty() || !placement.var_file.empty() || !placement.tool_table.empty())
-    throw std::invalid_argument(
+    throw UsageError(
         "five-axis programs: --work-offset, --var-file and --tool-table do not apply; place the part with "
         "--part-origin and give the tool in the machine file");
   post::InitialPose p;
@@ -59,7 +60,7 @@ post::InitialPose FiveAxisCliOptions::initial(const Machine& m, const ProgramSet
   int rotary = 0;
   for (AxisName a : m.axis_order) rotary += is_rotary(a) ? 1 : 0;
   if (v.size() != 3 && v.size() != static_cast<size_t>(3 + rotary))
-    throw std::invalid_argument("--initial-position needs X,Y,Z or X,Y,Z and every rotary axis (degrees)");
+    throw UsageError("--initial-position needs X,Y,Z or X,Y,Z and every rotary axis (degrees)");
   p.tip_mm = Eigen::Vector3d(v[0], v[1], v[2]);
   size_t next = 3;
   for (int k = 0; k < m.axis_count() && v.size() > 3; ++k)

@@ -79,7 +79,8 @@ Runner register_post(CLI::App& app) {
       ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
   auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map) instead of --errors; five-axis machines only");
   errors->excludes(table);
-  sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)");
+  sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--decimals", o->decimals, "Decimals of rewritten numbers (default 4 in mm, 5 in inch)")->check(CLI::Range(0, 9));
   o->placement.add_to(*sub);
   o->five.add_to(*sub, /*post=*/true);
