@@ -1,0 +1,256 @@
+// Five-axis tables (X'Y'ZA'C' of Lei & Hsu 2003): the table against
+// independent derivations — the direct model at the nodes, the defining
+// equation of the correction (Lei & Hsu eq. 4) and its first-order form
+// (eq. 6, with J_v_u solved by SVD here, not by CorrectionSolver's block
+// solve), interpolation within the tolerance at points of another random
+// generator, the file round trip, the csv columns of shared/spec/cli.md and
+// the controllers' refusals.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/SVD>
+#include <gtest/gtest.h>
+
+#include "core/errors_csv.h"
+#include "core/jacobian.h"
+#include "core/machine_json.h"
+#include "maps/exporters.h"
+#include "maps/table_builder.h"
+#include "maps/table_file.h"
+#include "tests/support/test_paths.h"
+
+namespace volmap::maps {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+const ErrorModel& xyzac() {
+  static const ErrorModel model(
+      load_machine_json(test::source_path("samples/machines/lei-hsu-xyzac.json")),
+      load_errors_csv(test::source_path("samples/errors/lei-hsu-xyzac.csv")));
+  return model;
+}
+
+// A small grid: 150 mm, 125 mm, 125 mm, A 26 deg (-100 .. 30: 0 is not a
+// node), C 45 deg.
+const VolumetricTable& small_table() {
+  static const VolumetricTable t = build_table(xyzac(), {150, 125, 125, 26 * kDeg, 45 * kDeg});
+  return t;
+}
+
+int channel(const VolumetricTable& t, const char* name) {
+  const std::optional<int> c = t.channel(name);
+  EXPECT_TRUE(c.has_value()) << name;
+  return c.value_or(0);
+}
+
+TEST(MapFiveAxis, ChannelsAreDvAndTheCorrectionOfEveryAxis) {
+  const VolumetricTable& t = small_table();
+  EXPECT_EQ(t.channels, (std::vector<std::string>{"ex", "ey", "ez", "ei", "ej", "ek", "ux", "uy",
+                                                  "uz", "ua", "uc"}));
+  EXPECT_TRUE(t.pose_correction());
+  EXPECT_FALSE(t.three_axis_correction());
+  ASSERT_EQ(t.axis_count(), 5);
+  EXPECT_EQ(t.grid[3].count, 6);  // -100 -74 -48 -22 4 30
+  EXPECT_TRUE(t.grid[4].periodic);
+  EXPECT_EQ(t.grid[4].count, 9);
+}
+
+TEST(MapFiveAxis, NodesEqualTheDirectModel) {
+  const VolumetricTable& t = small_table();
+  for (int layer = 0; layer < t.layer_count(); ++layer)
+    for (std::int64_t n = 0; n < t.node_count(); n += 7) {
+      const AxisVector u = t.node_position(n);
+      const PoseError e = xyzac().exact(u, t.layer_directions(layer));
+      const double* v = t.at(layer, n);
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(v[i], e.dP_mm[i]);
+        EXPECT_EQ(v[3 + i], e.dQ[i]);
+      }
+    }
+}
+
+// Eq. 4: the actual machine at u + du puts the tool where the nominal one
+// puts it at u (position and tool axis), away from the singular position.
+TEST(MapFiveAxis, CorrectionSolvesLeiHsuEq4AtTheNodes) {
+  const VolumetricTable& t = small_table();
+  const int u0 = channel(t, "ux");
+  int checked = 0;
+  for (std::int64_t n = 0; n < t.node_count(); n += 3) {
+    const AxisVector u = t.node_position(n);
+    if (u[3] <= -100 * kDeg + 1e-9 || u[3] >= 30 * kDeg - 1e-9) continue;  // travel ends
+    AxisVector du(5);
+    for (int a = 0; a < 5; ++a) du[a] = t.at(0, n)[u0 + a];
+    const ToolPose actual = xyzac().actual(u + du);
+    const ToolPose nominal = nominal_forward(xyzac().machine(), u);
+    EXPECT_LT((actual.tip_mm - nominal.tip_mm).norm(), 1e-9) << n;
+    EXPECT_LT((actual.axis - nominal.axis).norm(), 1e-11) << n;
+    ++checked;
+  }
+  EXPECT_GT(checked, 500);
+}
+
+// Eq. 6 (first order, dv = actual - nominal): du1 = -J^+ dv with the 6 x 5
+// Jacobian solved by SVD (least squares, exact for a consistent dv). The
+// iterated table value differs from it by second-order terms only.
+TEST(MapFiveAxis, CorrectionAgreesWithEq6ToFirstOrder) {
+  const VolumetricTable& t = small_table();
+  const int u0 = channel(t, "ux");
+  for (std::int64_t n = 0; n < t.node_count(); n += 11) {
+    const AxisVector u = t.node_position(n);
+    const PoseJacobian J = nominal_jacobian(xyzac().machine(), u);
+    const PoseError e = xyzac().exact(u);
+    Eigen::Matrix<double, 6, 1> dv;
+    dv << e.dP_mm, e.dQ;
+    const Eigen::MatrixXd Jd = J;
+    const Eigen::VectorXd du1 = Jd.jacobiSvd(Eigen::ComputeThinU | Eigen::ComputeThinV).solve(-dv);
+    for (int a = 0; a < 5; ++a) {
+      const double value = t.at(0, n)[u0 + a];
+      const double tol = a < 3 ? 2e-6 : 2e-8;  // mm (2 nm), rad (0.02 urad)
+      EXPECT_NEAR(value, du1[a], tol + 1e-3 * std::abs(du1[a])) << "node " << n << " axis " << a;
+    }
+  }
+}
+
+// Lei & Hsu section 4.1: at A = 0 the tool axis lies along C, whose
+// correction is suppressed (0); the linear axes still put the tip exactly.
+TEST(MapFiveAxis, SingularPositionAEqualsZeroSuppressesC) {
+  BuildSummary s;
+  const VolumetricTable t = build_table(xyzac(), {300, 250, 250, 10 * kDeg, 90 * kDeg}, {}, &s);
+  const int uc = channel(t, "uc"), u0 = channel(t, "ux");
+  std::int64_t at_zero = 0;
+  for (std::int64_t n = 0; n < t.node_count(); ++n) {
+    const AxisVector u = t.node_position(n);
+    if (std::abs(u[3]) > 1e-12) continue;
+    ++at_zero;
+    EXPECT_EQ(t.at(0, n)[uc], 0.0);
+    AxisVector du(5);
+    for (int a = 0; a < 5; ++a) du[a] = t.at(0, n)[u0 + a];
+    const ToolPose actual = xyzac().actual(u + du);
+    EXPECT_LT((actual.tip_mm - nominal_forward(xyzac().machine(), u).tip_mm).norm(), 1e-9);
+  }
+  EXPECT_GT(at_zero, 0);
+  EXPECT_EQ(s.correction_singular, at_zero * t.layer_count());
+}
+
+TEST(MapFiveAxis, AutomaticSpacingHoldsBetweenNodes) {
+  CheckOptions check;
+  check.random_points = 4000;
+  const double tol_um = 2.0, tol_urad = 2.0;
+  const AutoSpacingResult r =
+      build_for_tolerance(xyzac(), tol_um, check, {}, kMaxTableBytes, tol_urad);
+  EXPECT_LE(r.check.max_dv_um, tol_um);
+  EXPECT_LE(r.check.max_dq_urad, tol_urad);
+  EXPECT_GT(r.spacing_rad, 0.0);
+  // Independent points (another generator) anywhere in the travel.
+  std::mt19937_64 rng(77);
+  const VolumetricTable& t = r.table;
+  std::vector<double> v(static_cast<size_t>(t.channel_count()));
+  double worst_um = 0, worst_urad = 0;
+  for (int k = 0; k < 3000; ++k) {
+    AxisVector u(5);
+    for (int d = 0; d < 5; ++d) {
+      const GridAxis& g = t.grid[static_cast<size_t>(d)];
+      u[d] = std::uniform_real_distribution<double>(g.start, g.end)(rng);
+    }
+    interpolate(t, u, 0, Interpolation::kLinear, OutsidePolicy::kError, v.data());
+    const PoseError e = xyzac().exact(u);
+    worst_um = std::max(worst_um, (Eigen::Vector3d(v[0], v[1], v[2]) - e.dP_mm).norm() * 1e3);
+    worst_urad = std::max(worst_urad, (Eigen::Vector3d(v[3], v[4], v[5]) - e.dQ).norm() * 1e6);
+  }
+  EXPECT_LE(worst_um, tol_um);
+  EXPECT_LE(worst_urad, tol_urad);
+  // And a coarser grid would not do: the search stopped at the first pass.
+  EXPECT_GE(r.tables_tried, 2);
+}
+
+TEST(MapFiveAxis, TooLargeATableIsRefusedBeforeAllocating) {
+  BuildOptions o;
+  o.max_bytes = std::size_t{1} << 20;
+  try {
+    (void)build_table(xyzac(), {10, 10, 10, 5 * kDeg, 5 * kDeg}, o);
+    FAIL() << "no exception";
+  } catch (const TableTooLarge& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("--spacing"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  CheckOptions c;
+  EXPECT_THROW(build_for_tolerance(xyzac(), 1e-6, c, {}, std::size_t{4} << 20, 1e-6),
+               TableTooLarge);
+}
+
+TEST(MapFiveAxis, SameBytesForOneAndTwoThreads) {
+  BuildOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const std::vector<double> s = {200, 250, 250, 26 * kDeg, 60 * kDeg};
+  EXPECT_EQ(build_table(xyzac(), s, one).values, build_table(xyzac(), s, two).values);
+}
+
+TEST(MapFiveAxis, FileRoundTripIsExact) {
+  const VolumetricTable& t = small_table();
+  std::ostringstream out(std::ios::binary);
+  write_table(out, t);
+  std::istringstream in(out.str(), std::ios::binary);
+  const VolumetricTable r = read_table(in, "t.vmt");
+  EXPECT_EQ(r.channels, t.channels);
+  ASSERT_EQ(r.values.size(), t.values.size());
+  EXPECT_EQ(0, std::memcmp(r.values.data(), t.values.data(), t.size_bytes()));
+  for (int d = 0; d < 5; ++d) {
+    EXPECT_EQ(r.grid[static_cast<size_t>(d)].start, t.grid[static_cast<size_t>(d)].start);
+    EXPECT_EQ(r.grid[static_cast<size_t>(d)].spacing, t.grid[static_cast<size_t>(d)].spacing);
+    EXPECT_EQ(r.grid[static_cast<size_t>(d)].periodic, t.grid[static_cast<size_t>(d)].periodic);
+  }
+  EXPECT_TRUE(r.pose_correction());
+}
+
+TEST(MapFiveAxis, CsvHasAngleColumnsAndUnits) {
+  const VolumetricTable& t = small_table();
+  const std::vector<ExportFile> files = export_table(t, "csv");
+  ASSERT_EQ(files.size(), 1u);
+  const std::string& text = files[0].text;
+  const std::string header = text.substr(0, text.find('\n'));
+  EXPECT_EQ(header,
+            "x_mm,y_mm,z_mm,a_deg,c_deg,ex_um,ey_um,ez_um,ei_urad,ej_urad,ek_urad,ux_um,uy_um,"
+            "uz_um,ua_urad,uc_urad");
+  // Second row: node 1 (X = -150), values in um and urad.
+  std::istringstream rows(text.substr(header.size() + 1));
+  std::string row;
+  std::getline(rows, row);
+  std::getline(rows, row);
+  std::vector<double> cells;
+  std::stringstream ss(row);
+  for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(std::stod(cell));
+  ASSERT_EQ(cells.size(), 16u);
+  EXPECT_DOUBLE_EQ(cells[0], -150.0);
+  EXPECT_DOUBLE_EQ(cells[3], -100.0);
+  EXPECT_NEAR(cells[5], t.at(0, 1)[0] * 1e3, 1e-6);
+  EXPECT_NEAR(cells[8], t.at(0, 1)[3] * 1e6, 1e-6);
+  EXPECT_NEAR(cells[15], t.at(0, 1)[10] * 1e6, 1e-6);
+  EXPECT_NEAR(cells[11], t.at(0, 1)[6] * 1e3, 1e-6);
+  EXPECT_NO_THROW(export_table(t, "json"));
+}
+
+TEST(MapFiveAxis, ThreeAxisControllersRefuseWithOneLine) {
+  const VolumetricTable& t = small_table();
+  for (const char* format : {"linuxcnc", "siemens-lec", "siemens-cec", "fanuc", "heidenhain"}) {
+    try {
+      (void)export_table(t, format);
+      ADD_FAILURE() << format << ": no refusal";
+    } catch (const ExportError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(format), std::string::npos) << what;
+      EXPECT_NE(what.find("three-axis"), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace volmap::maps
