@@ -43,6 +43,17 @@ const VolumetricTable& small_table() {
   return t;
 }
 
+// u + du within the travel of every limited axis (the errors beyond it are
+// the table's business, not eq. 4's).
+bool inside(const AxisVector& u, const AxisVector& du) {
+  const Machine& m = xyzac().machine();
+  for (int a = 0; a < m.axis_count(); ++a) {
+    const AxisLimits& L = m.limits[static_cast<size_t>(a)];
+    if (!L.unlimited && (u[a] + du[a] < L.min || u[a] + du[a] > L.max)) return false;
+  }
+  return true;
+}
+
 int channel(const VolumetricTable& t, const char* name) {
   const std::optional<int> c = t.channel(name);
   EXPECT_TRUE(c.has_value()) << name;
@@ -83,21 +94,23 @@ TEST(MapFiveAxis, CorrectionSolvesLeiHsuEq4AtTheNodes) {
   int checked = 0;
   for (std::int64_t n = 0; n < t.node_count(); n += 3) {
     const AxisVector u = t.node_position(n);
-    if (u[3] <= -100 * kDeg + 1e-9 || u[3] >= 30 * kDeg - 1e-9) continue;  // travel ends
     AxisVector du(5);
     for (int a = 0; a < 5; ++a) du[a] = t.at(0, n)[u0 + a];
+    if (!inside(u, du)) continue;
     const ToolPose actual = xyzac().actual(u + du);
     const ToolPose nominal = nominal_forward(xyzac().machine(), u);
     EXPECT_LT((actual.tip_mm - nominal.tip_mm).norm(), 1e-9) << n;
     EXPECT_LT((actual.axis - nominal.axis).norm(), 1e-11) << n;
     ++checked;
   }
-  EXPECT_GT(checked, 500);
+  EXPECT_GT(checked, 200);
 }
 
 // Eq. 6 (first order, dv = actual - nominal): du1 = -J^+ dv with the 6 x 5
 // Jacobian solved by SVD (least squares, exact for a consistent dv). The
-// iterated table value differs from it by second-order terms only.
+// iterated table value differs from it by second-order terms only: the
+// change of J over du (rotary du times a lever of up to ~1000 mm) and of
+// the errors over du.
 TEST(MapFiveAxis, CorrectionAgreesWithEq6ToFirstOrder) {
   const VolumetricTable& t = small_table();
   const int u0 = channel(t, "ux");
@@ -109,10 +122,11 @@ TEST(MapFiveAxis, CorrectionAgreesWithEq6ToFirstOrder) {
     dv << e.dP_mm, e.dQ;
     const Eigen::MatrixXd Jd = J;
     const Eigen::VectorXd du1 = Jd.jacobiSvd(Eigen::ComputeThinU | Eigen::ComputeThinV).solve(-dv);
+    const double rot2 = du1[3] * du1[3] + du1[4] * du1[4];
     for (int a = 0; a < 5; ++a) {
       const double value = t.at(0, n)[u0 + a];
-      const double tol = a < 3 ? 2e-6 : 2e-8;  // mm (2 nm), rad (0.02 urad)
-      EXPECT_NEAR(value, du1[a], tol + 1e-3 * std::abs(du1[a])) << "node " << n << " axis " << a;
+      const double tol = a < 3 ? 1e-7 + 1e3 * rot2 : 1e-9 + 10 * rot2;  // mm, rad
+      EXPECT_NEAR(value, du1[a], tol + 2e-3 * std::abs(du1[a])) << "node " << n << " axis " << a;
     }
   }
 }
@@ -131,6 +145,7 @@ TEST(MapFiveAxis, SingularPositionAEqualsZeroSuppressesC) {
     EXPECT_EQ(t.at(0, n)[uc], 0.0);
     AxisVector du(5);
     for (int a = 0; a < 5; ++a) du[a] = t.at(0, n)[u0 + a];
+    if (!inside(u, du)) continue;
     const ToolPose actual = xyzac().actual(u + du);
     EXPECT_LT((actual.tip_mm - nominal_forward(xyzac().machine(), u).tip_mm).norm(), 1e-9);
   }
