@@ -202,7 +202,7 @@ void fill_table(const ErrorModel& model, VolumetricTable& table, const BuildOpti
       options.progress);
 
   if (options.repeatability && table.channel("u"))
-    fill_uncertainty(model, table, *options.repeatability, threads);
+    fill_uncertainty(model, table, *options.repeatability, threads, options.covariance);
 
   if (summary != nullptr) {
     summary->seconds =
@@ -448,15 +448,18 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
       try {
         (void)make_table_layout(model, spacing, max_bytes, extra);  // throws TableTooLarge
       } catch (const TableTooLarge& e) {
+        std::string what = e.what();
+        what = what.substr(0, what.find("; give a coarser"));
         throw TableTooLarge(fmt::format(
-            "automatic spacing for {} um{}: {} at {} (best so far {:.3g} x the tolerance at {}); "
+            "automatic spacing for {} um{}: at {} {} (best so far {:.3g} x the tolerance at {}); "
             "give --spacing, or raise the tolerance",
-            tolerance_um, rotary ? fmt::format(" / {} urad", tolerance_urad) : "", e.what(),
-            spacing_text(m, s_mm, s_deg), best, best_at.empty() ? "none" : best_at));
+            tolerance_um, rotary ? fmt::format(" / {} urad", tolerance_urad) : "",
+            spacing_text(m, s_mm, s_deg), what, best, best_at.empty() ? "none" : best_at));
       }
     }
     AutoSpacingResult r;
     r.table = make_table_layout(model, spacing, max_bytes, extra);
+    if (build.repeatability) add_uncertainty_channel(r.table);  // the layout is still empty
     BuildOptions quiet = build;
     quiet.progress = nullptr;     // the search builds many tables: no bar
     quiet.repeatability.reset();  // filled for the chosen table only
@@ -482,10 +485,8 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
       r.table.tolerance_um = tolerance_um;
       r.table.achieved_um = rotary ? r.check.max_dv_um : r.check.max_um();
       r.table.checked_with = c.method;
-      if (build.repeatability) {
-        add_uncertainty_channel(r.table);
-        fill_uncertainty(model, r.table, *build.repeatability, build.threads);
-      }
+      if (build.repeatability)
+        fill_uncertainty(model, r.table, *build.repeatability, build.threads, build.covariance);
       return r;
     }
     if (!rotary) {

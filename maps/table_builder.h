@@ -31,6 +31,9 @@ struct BuildOptions {
   /// When set, the table gets the channel "u" (maps/node_uncertainty.h),
   /// filled after the other channels.
   std::optional<Repeatability> repeatability;
+  /// With repeatability set: the covariance of identified location errors
+  /// too (maps/node_uncertainty.h). Not owned; may be null.
+  const ParameterCovariance* covariance = nullptr;
   /// build_table refuses (TableTooLarge, before allocating) beyond this.
   std::size_t max_bytes = kMaxTableBytes;
 };

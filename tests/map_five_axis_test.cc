@@ -15,11 +15,13 @@
 
 #include <Eigen/SVD>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "core/errors_csv.h"
 #include "core/jacobian.h"
 #include "core/machine_json.h"
 #include "maps/exporters.h"
+#include "maps/node_uncertainty.h"
 #include "maps/table_builder.h"
 #include "maps/table_file.h"
 #include "tests/support/test_paths.h"
@@ -265,6 +267,49 @@ TEST(MapFiveAxis, ThreeAxisControllersRefuseWithOneLine) {
       EXPECT_EQ(what.find('\n'), std::string::npos) << what;
     }
   }
+}
+
+// Covariance of identified location errors (an identify --json report):
+// u at a node against sqrt(g^T Sigma g) summed over x, y, z with the gains g
+// taken by finite differences of the exact model (perturbing the errors
+// file's location errors), not from the gain evaluator.
+TEST(MapFiveAxis, IdentifiedCovariancePropagatesToTheNodes) {
+  const nlohmann::json report = nlohmann::json::parse(R"({
+    "format": "volmap-identify/1",
+    "parameters": [
+      {"name": "EY0A", "kind": "location", "unit": "um", "status": "estimated", "estimate": 3, "std_error": 2.0},
+      {"name": "offset_x.run1", "kind": "setup_offset", "unit": "um", "status": "estimated", "estimate": 1, "std_error": 9.0},
+      {"name": "EB0A", "kind": "location", "unit": "urad", "status": "estimated", "estimate": 4, "std_error": 5.0}
+    ],
+    "correlation": {"names": ["EY0A", "offset_x.run1", "EB0A"],
+                    "matrix": [[1, 0.2, 0.6], [0.2, 1, 0.1], [0.6, 0.1, 1]]}})");
+  const Machine& m = xyzac().machine();
+  const ParameterCovariance c = covariance_from_identify(report, m, Formulation::kIndependent, "id.json");
+  ASSERT_EQ(c.names, (std::vector<std::string>{"EY0A", "EB0A"}));
+  BuildOptions o;
+  o.repeatability = Repeatability{};  // only the covariance
+  o.covariance = &c;
+  const VolumetricTable t = build_table(xyzac(), {300, 250, 250, 65 * kDeg, 90 * kDeg}, o);
+  const int uc = channel(t, "u");
+  auto gain = [&](const char* name, double delta, const AxisVector& u) {
+    ErrorSet e = xyzac().errors();
+    e.location[name] += delta;
+    const ErrorModel perturbed(m, e);
+    return Eigen::Vector3d((perturbed.exact(u).dP_mm - xyzac().exact(u).dP_mm) / delta);
+  };
+  for (std::int64_t n = 0; n < t.node_count(); n += 5) {
+    const AxisVector u = t.node_position(n);
+    const Eigen::Vector3d g1 = gain("EY0A", 1e-4, u), g2 = gain("EB0A", 1e-7, u);
+    const double s1 = 2e-3, s2 = 5e-6, rho = 0.6;
+    const double var = s1 * s1 * g1.squaredNorm() + s2 * s2 * g2.squaredNorm() +
+                       2 * rho * s1 * s2 * g1.dot(g2);
+    EXPECT_NEAR(t.at(0, n)[uc], std::sqrt(var), 1e-3 * std::sqrt(var)) << n;
+  }
+  nlohmann::json bad = report;
+  bad["parameters"][0]["kind"] = "component";
+  bad["parameters"][0]["name"] = "EXX.p2";
+  EXPECT_THROW(covariance_from_identify(bad, m, Formulation::kIndependent, "id.json"),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -74,7 +74,7 @@ Runner register_map(CLI::App& app) {
   struct Opts {
     std::string machine, errors, errors_format = "auto", spacing, output, interpolation = "linear",
         model = "independent", form = "full";
-    std::string report;
+    std::string report, covariance;
     double tolerance_um = 0.0, tolerance_urad = 0.0, repeatability_um = -1.0,
            repeatability_urad = -1.0, max_table_gib = 2.0;
     int threads = 0;
@@ -134,6 +134,9 @@ Runner register_map(CLI::App& app) {
   sub->add_option("--repeatability-urad", o->repeatability_urad,
                   "Standard uncertainty of every angular error, urad (default: '# repeatability_urad:')")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--covariance", o->covariance,
+                  "volmap identify --json report: propagate the covariance of the identified "
+                  "location errors to the per-node uncertainty u (replaces their repeatability)");
   sub->footer(
       "Example:\n  volmap map --machine samples/machines/hsu-3axis.json "
       "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt\n"
@@ -143,7 +146,7 @@ Runner register_map(CLI::App& app) {
       "--errors samples/errors/lei-hsu-xyzac.csv --tolerance-um 2 --tolerance-urad 2 -o xyzac.vmt");
 
   return [o]() -> int {
-    maps::refuse_output_equal_to_input(o->output, {o->machine, o->errors});
+    maps::refuse_output_equal_to_input(o->output, {o->machine, o->errors, o->covariance});
     if (!o->report.empty()) maps::refuse_output_equal_to_input(o->report, {o->machine, o->errors, o->output});
     if (o->output == "-" && !o->json && isatty(1))
       throw std::invalid_argument("-o -: refusing to write a binary table to a terminal; "
@@ -157,6 +160,19 @@ Runner register_map(CLI::App& app) {
       if (!repeatability) repeatability.emplace();
       if (o->repeatability_um >= 0.0) repeatability->translational_mm = o->repeatability_um * 1e-3;
       if (o->repeatability_urad >= 0.0) repeatability->angular_rad = o->repeatability_urad * 1e-6;
+    }
+    std::optional<maps::ParameterCovariance> covariance;
+    if (!o->covariance.empty()) {
+      std::ifstream in(o->covariance);
+      if (!in) throw std::invalid_argument(fmt::format("{}: cannot open the identify report", o->covariance));
+      nlohmann::json report;
+      try {
+        report = nlohmann::json::parse(in);
+      } catch (const nlohmann::json::parse_error& e) {
+        throw std::invalid_argument(fmt::format("{}: not JSON ({})", o->covariance, e.what()));
+      }
+      covariance = maps::covariance_from_identify(report, m, f, o->covariance);
+      if (!repeatability) repeatability.emplace();
     }
     const ErrorModel model(m, std::move(errors), ModelOptions{f, OutsidePolicy::kError});
     if (o->form == "factorized") {
@@ -203,6 +219,7 @@ Runner register_map(CLI::App& app) {
     build.threads = threads;
     build.max_bytes = static_cast<std::size_t>(o->max_table_gib * double(1 << 30));
     build.repeatability = repeatability;
+    build.covariance = covariance ? &*covariance : nullptr;
     const bool bar = isatty(2) != 0;
     if (bar) {
       build.progress = [](std::int64_t done, std::int64_t total) {
