@@ -2,7 +2,8 @@
 // ErrorModel::exact evaluations per second, three-axis sample, 2 threads)
 // and a 101^3 three-axis table (target: < 0.5 s; the Hsu sample has a
 // bidirectional X table, so that is 2 x 101^3 nodes, each with the dv
-// evaluation and the fixed-point correction solve).
+// evaluation and the fixed-point correction solve); and a five-axis
+// X'Y'ZA'C' table with the CorrectionSolver correction (BM_Table5AxisXYZAC).
 #include <atomic>
 #include <thread>
 #include <utility>

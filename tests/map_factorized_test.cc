@@ -5,6 +5,7 @@
 // it and reports five-axis full tables.
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <sstream>
 #include <string>
@@ -83,8 +84,15 @@ TEST(MapCli, FiveAxisFullAndFactorizedTables) {
   const std::string machine = test::source_path("samples/machines/lei-hsu-xyzac.json");
   const std::string errors = test::source_path("samples/errors/lei-hsu-xyzac.csv");
   test::CliResult r = test::run_volmap("map --machine " + machine + " --errors " + errors +
-                                       " --spacing 150,125,125,26,45 --json -o " + dir + "x5.vmt");
+                                       " --spacing 150,125,125,26,45 --json --report " + dir +
+                                       "x5.html -o " + dir + "x5.vmt");
   ASSERT_EQ(r.status, 0) << r.err;
+  {
+    std::ifstream page(dir + "x5.html");
+    const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+    EXPECT_NE(html.find("uc (urad)"), std::string::npos);
+    EXPECT_NE(html.find("|tool-axis error| (urad)"), std::string::npos);
+  }
   const nlohmann::json s = nlohmann::json::parse(r.out);
   EXPECT_EQ(s["channels"].size(), 11u);
   EXPECT_EQ(s["grid"][3]["unit"], "deg");

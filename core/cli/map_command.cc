@@ -237,6 +237,7 @@ Runner register_map(CLI::App& app) {
 
     maps::VolumetricTable table;
     double tolerance_urad = 0.0;
+    int grids_tried = 0;
     maps::BuildSummary summary;
     maps::CheckResult checked;
     if (!o->spacing.empty()) {
@@ -252,6 +253,7 @@ Runner register_map(CLI::App& app) {
       maps::AutoSpacingResult r =
           maps::build_for_tolerance(model, tol, check, build, build.max_bytes, tol_urad);
       tolerance_urad = m.has_rotary_axes() ? tol_urad : 0.0;
+      grids_tried = r.tables_tried;
       if (bar) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
       table = std::move(r.table);
       summary = r.build;
@@ -352,6 +354,7 @@ Runner register_map(CLI::App& app) {
         doc["correction_max_residual_um"] = summary.correction_max_residual_mm * 1e3;
       }
       doc["check_points_per_layer"] = checked.points;
+      if (grids_tried > 0) doc["spacing_search_grids"] = grids_tried;
       doc["correction_clamped_nodes"] = summary.correction_clamped;
       doc["build_seconds"] = summary.seconds;
       doc["threads"] = threads;
