@@ -14,7 +14,11 @@ std::string position_column(AxisName a) {
   const char c = static_cast<char>(axis_char(a) - 'A' + 'a');
   return fmt::format("{}_{}", c, is_rotary(a) ? "deg" : "mm");
 }
-double display(AxisName a, double v) { return is_rotary(a) ? v * 180.0 / M_PI : v; }
+// Degrees rounded to 1e-9 deg (the rad round trip of 30 deg gives
+// 29.999999999999996).
+double display(AxisName a, double v) {
+  return is_rotary(a) ? std::round(v * 180.0 / M_PI * 1e9) / 1e9 + 0.0 : v;
+}
 
 // Channel names with display units: lengths in um, angles / unit vectors in urad.
 std::string value_column(const std::string& channel) {

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/errors_csv.h"
+#include "core/input_error.h"
 #include "core/jacobian.h"
 #include "core/machine_json.h"
 #include "maps/exporters.h"
@@ -225,6 +226,13 @@ TEST(MapFiveAxis, FileRoundTripIsExact) {
     EXPECT_EQ(r.grid[static_cast<size_t>(d)].periodic, t.grid[static_cast<size_t>(d)].periodic);
   }
   EXPECT_TRUE(r.pose_correction());
+  // Version 2 (docs/maps.md): a version-1 reader refuses it; a version-1
+  // header on these channels is refused here.
+  EXPECT_EQ(out.str()[8], 2);
+  std::string v1 = out.str();
+  v1[8] = 1;
+  std::istringstream in1(v1, std::ios::binary);
+  EXPECT_THROW(read_table(in1, "v1.vmt"), InputError);
 }
 
 TEST(MapFiveAxis, CsvHasAngleColumnsAndUnits) {

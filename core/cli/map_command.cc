@@ -57,7 +57,11 @@ std::vector<double> parse_spacing(const Machine& m, const std::string& text) {
   return out;
 }
 
-double display(AxisName a, double v) { return is_rotary(a) ? v * 180.0 / M_PI : v; }
+// Degrees rounded to 1e-9 deg (the rad round trip of 30 deg gives
+// 29.999999999999996).
+double display(AxisName a, double v) {
+  return is_rotary(a) ? std::round(v * 180.0 / M_PI * 1e9) / 1e9 + 0.0 : v;
+}
 const char* unit(AxisName a) { return is_rotary(a) ? "deg" : "mm"; }
 
 std::string layer_name(const maps::VolumetricTable& t, int layer) {
