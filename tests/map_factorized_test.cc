@@ -110,5 +110,30 @@ TEST(MapCli, FiveAxisFullAndFactorizedTables) {
   EXPECT_NO_THROW((void)read_factorized(in, dir + "x5.json"));
 }
 
+// identify --json -> map --covariance: the report identify writes is what
+// map reads (the contract between the two), and u appears.
+TEST(MapCli, CovarianceFromAnIdentifyReport) {
+  const std::string dir = ::testing::TempDir();
+  const std::string machine = test::source_path("samples/machines/lei-hsu-xyzac.json");
+  const std::string errors = test::source_path("samples/errors/lei-hsu-xyzac.csv");
+  test::CliResult r = test::run_volmap("simulate --machine " + machine + " --errors " + errors +
+                                       " --plan " + test::source_path("samples/plans/probe-ball.json") +
+                                       " -o " + dir + "x5rec.csv");
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = test::run_volmap("identify --machine " + machine + " --recordings " + dir + "x5rec.csv -o " +
+                       dir + "x5id.csv --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  {
+    std::ofstream report(dir + "x5id.json");
+    report << r.out;
+  }
+  r = test::run_volmap("map --machine " + machine + " --errors " + dir + "x5id.csv --covariance " +
+                       dir + "x5id.json --spacing 300,250,250,65,90 --json -o " + dir + "x5cov.vmt");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(r.out);
+  EXPECT_EQ(s["channels"].back(), "u");
+  EXPECT_GT(s["max_u_um"].get<double>(), 0.0);
+}
+
 }  // namespace
 }  // namespace volmap::maps

@@ -178,6 +178,11 @@ Runner register_map(CLI::App& app) {
       covariance = maps::covariance_from_identify(report, m, f, o->covariance);
       if (!repeatability) repeatability.emplace();
     }
+    if (o->tolerance_urad > 0.0 && !m.has_rotary_axes())
+      throw std::invalid_argument(fmt::format(
+          "--tolerance-urad: {} has no rotary axes (its tables carry no tool-axis error); use "
+          "--tolerance-um",
+          m.name));
     const ErrorModel model(m, std::move(errors), ModelOptions{f, OutsidePolicy::kError});
     if (o->form == "factorized") {
       if (!o->spacing.empty() || o->tolerance_um > 0.0 || o->tolerance_urad > 0.0 || !o->report.empty())
