@@ -183,8 +183,28 @@ TEST(MapFiveAxis, AutomaticSpacingHoldsBetweenNodes) {
   }
   EXPECT_LE(worst_um, tol_um);
   EXPECT_LE(worst_urad, tol_urad);
-  // And a coarser grid would not do: the search stopped at the first pass.
   EXPECT_GE(r.tables_tried, 2);
+  // Coarsest: one step coarser in either group (the other kept) fails.
+  const std::vector<double>& lin = auto_spacing_sequence();
+  const std::vector<double>& rot = auto_rotary_spacing_sequence();
+  const size_t li = static_cast<size_t>(std::find(lin.begin(), lin.end(), r.spacing_mm) - lin.begin());
+  const size_t ri = static_cast<size_t>(
+      std::find_if(rot.begin(), rot.end(), [&](double d) { return std::abs(d * kDeg - r.spacing_rad) < 1e-12; }) -
+      rot.begin());
+  ASSERT_LT(li, lin.size());
+  ASSERT_LT(ri, rot.size());
+  auto passes = [&](double mm, double deg) {
+    const VolumetricTable c = build_table(xyzac(), {mm, mm, mm, std::min(deg, 130.0) * kDeg, deg * kDeg});
+    const CheckResult k = check_table(xyzac(), c, check);
+    return k.max_dv_um <= tol_um && k.max_dq_urad <= tol_urad;
+  };
+  if (li > 0) {
+    EXPECT_FALSE(passes(lin[li - 1], rot[ri])) << lin[li - 1] << " mm";
+  }
+  if (ri > 0) {
+    EXPECT_FALSE(passes(lin[li], rot[ri - 1])) << rot[ri - 1] << " deg";
+  }
+  EXPECT_TRUE(li > 0 || ri > 0);
 }
 
 TEST(MapFiveAxis, TooLargeATableIsRefusedBeforeAllocating) {
