@@ -2,7 +2,8 @@
 // tolerance.
 //
 // Every node is one evaluation of ErrorModel::exact per direction layer
-// (plus the fixed-point correction solve on three-axis machines), written
+// (plus the fixed-point correction solve on three-axis machines, or the
+// iterated CorrectionSolver of Lei & Hsu eqs. 4-6 on five-axis ones), written
 // straight into the table's preallocated storage. Work is split into rows
 // (all nodes along the first axis, one layer) handed out by an atomic
 // counter to std::threads; a node's value depends only on its position, so
