@@ -207,6 +207,40 @@ TEST(MapFiveAxis, AutomaticSpacingHoldsBetweenNodes) {
   EXPECT_TRUE(li > 0 || ri > 0);
 }
 
+// Bidirectional X (a minus-direction table 5 um longer in EXX): two layers,
+// each equal to the direct model and to CorrectionSolver in its direction.
+TEST(MapFiveAxis, DirectionLayersOfABidirectionalAxis) {
+  ErrorSet e = xyzac().errors();
+  AxisErrors& x = *e.axis[static_cast<size_t>(AxisName::X)];
+  x.minus = x.plus;
+  for (auto& v : x.minus.value) v[0] += 5e-3;
+  const ErrorModel model(xyzac().machine(), e);
+  const VolumetricTable t = build_table(model, {300, 250, 250, 65 * kDeg, 90 * kDeg});
+  ASSERT_EQ(t.layer_count(), 2);
+  EXPECT_EQ(t.bidirectional_axes, std::vector<int>{0});
+  const ErrorModel clamped(model.machine(), model.errors(),
+                           ModelOptions{Formulation::kIndependent, OutsidePolicy::kClamp});
+  const CorrectionSolver solver(clamped, table_correction_options());
+  const int u0 = channel(t, "ux");
+  for (int layer = 0; layer < 2; ++layer) {
+    const ApproachDirections dir = t.layer_directions(layer);
+    EXPECT_EQ(dir[0], layer == 0 ? 1 : -1);
+    for (std::int64_t n = 0; n < t.node_count(); n += 3) {
+      const AxisVector u = t.node_position(n);
+      const PoseError dv = model.exact(u, dir);
+      const CorrectionResult c = solver.correct(u, dir);
+      for (int i = 0; i < 3; ++i) EXPECT_EQ(t.at(layer, n)[i], dv.dP_mm[i]);
+      for (int a = 0; a < 5; ++a) EXPECT_EQ(t.at(layer, n)[u0 + a], c.du[a]);
+    }
+  }
+  // The layers differ by the 5 um of EXX: a translation along X, which A
+  // (about X) and C = 0 (node 0) leave along the workpiece's x (to second
+  // order: the exact HTM product turns it by the angular errors, ~1e-4).
+  ASSERT_EQ(t.node_position(0)[4], 0.0);
+  EXPECT_NEAR(std::abs(t.at(1, 0)[0] - t.at(0, 0)[0]), 5e-3, 1e-6);
+  EXPECT_NEAR(t.at(1, 0)[1] - t.at(0, 0)[1], 0.0, 1e-6);
+}
+
 TEST(MapFiveAxis, TooLargeATableIsRefusedBeforeAllocating) {
   BuildOptions o;
   o.max_bytes = std::size_t{1} << 20;
