@@ -85,3 +85,34 @@ TEST(Cli, HelpEndsWithAnExample) {
 }
 
 }  // namespace
+
+// cli.md writes `volmap export --table T --format FORMAT -o DIR`: formats
+// that export the component errors themselves (isg-csv) read them from the
+// errors file the table names when --errors is not given, with the same
+// result as giving it.
+TEST(Cli, ExportReadsTheErrorsFileTheTableNames) {
+  const std::string dir = ::testing::TempDir() + "cli_test_export_" + std::to_string(getpid());
+  const std::string table = dir + ".vmt";
+  ASSERT_EQ(run("map --machine " + sample("machines/hsu-3axis.json") + " --errors " + sample("errors/hsu-3axis.csv") +
+                " --spacing 50,50,50 -o " + table)
+                .status,
+            0);
+  const Result implicit = run("export --table " + table + " --format isg-csv -o " + dir + "-a");
+  ASSERT_EQ(implicit.status, 0) << implicit.err;
+  const Result given = run("export --table " + table + " --format isg-csv --errors " + sample("errors/hsu-3axis.csv") +
+                           " -o " + dir + "-b");
+  ASSERT_EQ(given.status, 0) << given.err;
+  auto slurp = [](const std::string& p) {
+    std::string s;
+    if (FILE* f = std::fopen(p.c_str(), "rb")) {
+      std::array<char, 4096> b;
+      size_t n;
+      while ((n = std::fread(b.data(), 1, b.size(), f)) > 0) s.append(b.data(), n);
+      std::fclose(f);
+    }
+    return s;
+  };
+  const std::string a = slurp(dir + "-a/isg_errors.csv"), b = slurp(dir + "-b/isg_errors.csv");
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, b);
+}

@@ -2,6 +2,7 @@
 // a controller (docs/exports.md) into a folder.
 #include <iostream>
 #include <memory>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -39,7 +40,8 @@ Runner register_export(CLI::App& app) {
                   "controller tables (default: each axis's travel start)");
   sub->add_option("--errors", o->errors,
                   "The errors the table was built from (errors.md CSV, ISG CSV or Etalon): needed by "
-                  "isg-csv and by the KinematicsComp tables of heidenhain");
+                  "isg-csv and by the KinematicsComp tables of heidenhain; default the errors file the table "
+                  "names, when it exists");
   sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
       ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
   sub->add_option("--detection-unit-um", o->detection_unit_um,
@@ -67,6 +69,15 @@ Runner register_export(CLI::App& app) {
     std::optional<ErrorSet> errors;
     if (!o->errors.empty()) {
       errors = load_errors(o->errors, parse_errors_format(o->errors_format));
+      options.errors = &*errors;
+    } else if (!table.errors_source.empty() && table.errors_source != "-" &&
+               std::filesystem::is_regular_file(table.errors_source)) {
+      // The table names the errors file it was built from (as given to
+      // volmap map): formats that export the component errors themselves
+      // (isg-csv, HEIDENHAIN KinematicsComp) read it from there when
+      // --errors is not given, so `export --table T --format F -o DIR` works
+      // as cli.md writes it. --errors overrides.
+      errors = load_errors(table.errors_source, ErrorsFormat::kAuto);
       options.errors = &*errors;
     }
     std::vector<maps::ExportFile> files;
