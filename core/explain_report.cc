@@ -125,7 +125,18 @@ nlohmann::ordered_json explain_json(const ExplainResult& r) {
     o["axis"] = axis_json(f.axis);
     nlohmann::ordered_json p = nlohmann::ordered_json::object(), se = nlohmann::ordered_json::object();
     for (const auto& [k, v] : f.parameters) p[k] = v;
-    for (const auto& [k, v] : f.std_errors) se[k] = num(v);
+    // "name/i" entries belong to an array parameter (setup_shift's
+    // per_run_um): the same shape as the parameter.
+    for (const auto& [k, v] : f.std_errors) {
+      const std::size_t slash = k.find('/');
+      if (slash == std::string::npos) {
+        se[k] = num(v);
+      } else {
+        nlohmann::ordered_json& arr = se[k.substr(0, slash)];
+        if (!arr.is_array()) arr = nlohmann::ordered_json::array();
+        arr.push_back(nlohmann::ordered_json(num(v)));
+      }
+    }
     o["parameters"] = p;
     o["std_errors"] = se;
     o["rms_before_um"] = num(f.rms_before_um);

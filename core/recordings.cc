@@ -516,4 +516,24 @@ void write_recordings_csv(std::ostream& out, const Recordings& r) {
   }
 }
 
+void require_machine_tool_length(const Recordings& r, double machine_tool_mm, const std::string& machine_name) {
+  constexpr double kTolMm = 1e-3;
+  auto refuse = [&](int line, double tool_mm) {
+    throw InputError(r.file, line,
+                     fmt::format("tool length {:g} mm, machine \"{}\" has {:g} mm; the fit predicts with the machine's "
+                                 "tool: set tool_length_mm in the machine file to the tool of the recording, or split "
+                                 "the recording by tool",
+                                 tool_mm, machine_name, machine_tool_mm));
+  };
+  for (std::size_t i = 0; i < r.tool_mm.size(); ++i)
+    if (std::isfinite(r.tool_mm[i]) && std::abs(r.tool_mm[i] - machine_tool_mm) > kTolMm)
+      refuse(i < r.line.size() ? r.line[i] : 0, r.tool_mm[i]);
+  const auto it = r.metadata.find("tool_mm");
+  if (it != r.metadata.end() && r.tool_mm.empty()) {
+    char* end = nullptr;
+    const double v = std::strtod(it->second.c_str(), &end);
+    if (end != it->second.c_str() && std::isfinite(v) && std::abs(v - machine_tool_mm) > kTolMm) refuse(0, v);
+  }
+}
+
 }  // namespace volmap

@@ -114,6 +114,14 @@ double quantize_recorded_position(AxisName a, double position);
 
 /// Column name of axis a's position ("x_mm", "c_deg") and direction ("dir_x").
 std::string position_column_name(AxisName a);
+
+/// The tool length of the recording (the tool_mm column, else the
+/// "# tool_mm:" metadata) must be the machine's: the fits of identify and
+/// explain predict with the machine's tool, so a recording made with
+/// another tool (an Abbe lever of angular errors times the difference) would
+/// be fitted wrongly. Throws InputError naming the file and the first line
+/// that differs by more than 1 um, and what to do.
+void require_machine_tool_length(const Recordings& r, double machine_tool_mm, const std::string& machine_name);
 std::string dir_column_name(AxisName a);
 
 }  // namespace volmap

@@ -545,3 +545,45 @@ TEST(ExplainReport, SelfContainedHtmlLoadsInChromiumWithoutConsoleErrors) {
 
 }  // namespace
 }  // namespace volmap
+
+namespace volmap {
+namespace {
+
+// A recording made with another tool than the machine file's: the fits
+// predict with the machine's tool, so explain and identify refuse it with
+// the file and line, instead of fitting Abbe errors wrongly. A recording
+// with no rows says so.
+TEST(ExplainCli, ToolOtherThanTheMachinesAndEmptyRecordingsAreRefused) {
+  const std::string src = test::source_path("samples/recordings/null.csv");
+  std::ifstream in(src);
+  std::string text, line;
+  int n = 0, header_line = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (!line.empty() && line[0] != '#' && header_line == 0) {
+      header_line = n;
+      text += line + ",tool_mm\n";
+      continue;
+    }
+    text += line + (header_line && n > header_line ? (n == header_line + 3 ? ",300\n" : ",100\n") : "\n");
+  }
+  const std::string path = ::testing::TempDir() + "explain_test_tool.csv";
+  std::ofstream(path) << text;
+  const std::string m = test::source_path(kM3);
+  for (const std::string& cmd : {"explain --recordings " + path + " --machine " + m,
+                                 "identify --recordings " + path + " --machine " + m + " -o " + path + ".out.csv"}) {
+    const test::CliResult r = test::run_volmap(cmd);
+    EXPECT_EQ(r.status, 1) << cmd;
+    EXPECT_NE(r.err.find(path + ":" + std::to_string(header_line + 3) + ":"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("tool length 300"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(path + ".out.csv"));
+  }
+  const std::string empty = ::testing::TempDir() + "explain_test_empty.csv";
+  std::ofstream(empty) << "# volmap recordings v1\nrun,t_s,x_mm,ex_um\n";
+  const test::CliResult r = test::run_volmap("explain --recordings " + empty);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("no observations"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace volmap

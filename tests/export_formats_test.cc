@@ -571,8 +571,14 @@ TEST(ExportCommand, MapThenExportWritesTheFiles) {
   // The exported files equal the library's export of the same table.
   const VolumetricTable t = load_table(table);
   EXPECT_EQ(read_file(dir / "lcnc" / "Y.comp"), file_named(export_table(t, "linuxcnc"), "Y.comp").text);
-  // Errors: one line, exit 1, nothing written.
-  r = run("export --table " + table + " --format isg-csv -o " + (dir / "isg").string());
+  // Errors: one line, exit 1, nothing written. isg-csv needs the component
+  // errors: the file the table names, gone here, or --errors.
+  const fs::path gone = dir / "gone.csv";
+  fs::copy_file(errors, gone);
+  const std::string table_gone = (dir / "gone.vmt").string();
+  ASSERT_EQ(run("map --machine " + machine + " --errors " + gone.string() + " --spacing 50,50,50 -o " + table_gone).status, 0);
+  fs::remove(gone);
+  r = run("export --table " + table_gone + " --format isg-csv -o " + (dir / "isg").string());
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
   EXPECT_FALSE(fs::exists(dir / "isg"));

@@ -8,6 +8,7 @@
 #include "core/cli/commands.h"
 #include "core/errors_csv.h"
 #include "core/explain.h"
+#include "core/input_error.h"
 #include "core/machine_json.h"
 #include "core/recordings.h"
 
@@ -49,7 +50,10 @@ Runner register_explain(CLI::App& app) {
     if (!o->json.empty() && o->json == o->report)
       throw UsageError("--json and --report name the same file; give two files");
     const Recordings rec = load_recordings_csv(o->recordings);
+    if (rec.size() == 0)
+      throw InputError(o->recordings, 0, "no observations (a header and no rows); record some, or check the file");
     const Machine m = o->machine.empty() ? cartesian_machine_for(rec) : load_machine_json(o->machine);
+    if (!o->machine.empty()) require_machine_tool_length(rec, m.tool_length_mm, m.name);
     ExplainOptions opt;
     opt.degree = o->degree;
     opt.machine_assumed = o->machine.empty();

@@ -55,6 +55,7 @@ Runner register_identify(CLI::App& app) {
     refuse_output_equal_to_input(o->output, inputs);
     const Machine m = load_machine_json(o->machine);
     const Recordings rec = load_recordings_csv(o->recordings);
+    require_machine_tool_length(rec, m.tool_length_mm, m.name);
     IdentifyOptions opt;
     opt.formulation = o->model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
     opt.setup_offsets = o->setup_offsets;
