@@ -3,6 +3,8 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <string>
 
 #include "core/input_error.h"
 
@@ -19,8 +21,53 @@ bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
 
 Block lex_block(std::string_view text, int line, const std::string& file) {
   Block b;
-  b.text = std::string(text);
+  lex_block_into(text, line, file, b);
+  return b;
+}
+
+namespace {
+// Decimal digits with an optional sign and point, as the lexer collected
+// them: the exact double when the digits make an integer below 2^53 and at
+// most 22 decimals (one correctly rounded division of two exact doubles,
+// Clinger's fast path: the same value std::from_chars gives); false
+// otherwise (from_chars decides).
+bool parse_simple_decimal(std::string_view s, double& v) {
+  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  std::size_t i = 0;
+  bool negative = false;
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) negative = s[i++] == '-';
+  std::uint64_t m = 0;
+  int digits = 0, decimals = 0;
+  bool point = false;
+  for (; i < s.size(); ++i) {
+    const char c = s[i];
+    if (c == '.') {
+      if (point) return false;
+      point = true;
+      continue;
+    }
+    if (c < '0' || c > '9') return false;
+    if (m != 0 || c != '0') ++digits;
+    if (digits > 15) return false;  // below 2^53 for sure
+    m = m * 10 + static_cast<std::uint64_t>(c - '0');
+    if (point) ++decimals;
+  }
+  if (decimals > 22) return false;
+  const double r = static_cast<double>(m) / kPow10[decimals];
+  v = negative ? -r : r;
+  return true;
+}
+}  // namespace
+
+void lex_block_into(std::string_view text, int line, const std::string& file, Block& b) {
+  b.text.assign(text);
   b.line = line;
+  b.block_delete = false;
+  b.percent = false;
+  b.words.clear();
+  b.comment.clear();
   size_t i = 0;
   const size_t n = text.size();
   auto skip_space = [&] {
@@ -33,7 +80,7 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
     skip_space();
     if (i < n && text[i] != ';' && text[i] != '(')
       fail(file, line, i, "text after '%' on the program delimiter line; put it on a line of its own");
-    return b;
+    return;
   }
   if (i < n && text[i] == '/') {
     b.block_delete = true;
@@ -86,8 +133,12 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
       if (k < n && text[k] == '[')
         fail(file, line, k, "[ ] expressions are not supported; output literal numbers from CAM");
     }
-    // The number: sign, digits, point; spaces allowed between its characters.
-    std::string number;
+    // The number: sign, digits, point; spaces allowed between its characters
+    // (collected into `number` only when there are such spaces).
+    std::string_view number;
+    std::string spaced;
+    size_t first_char = i;
+    bool contiguous = true;
     size_t last = i;
     bool seen_point = false;
     int decimals = 0;
@@ -97,11 +148,18 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
         ++i;
         continue;
       }
-      const bool sign = (d == '+' || d == '-') && number.empty();
+      const bool sign = (d == '+' || d == '-') && last == first_char;
       if (std::isdigit(static_cast<unsigned char>(d)) || sign || (d == '.' && !seen_point)) {
         if (d == '.') seen_point = true;
         else if (seen_point && std::isdigit(static_cast<unsigned char>(d))) ++decimals;
-        number += d;
+        if (last == first_char) {
+          first_char = i;  // spaces before the number: it starts here
+        } else if (contiguous && i != last) {  // spaces inside the number: collect it
+          contiguous = false;
+          spaced.assign(text.substr(first_char, last - first_char));
+          std::erase_if(spaced, is_space);
+        }
+        if (!contiguous) spaced += d;
         ++i;
         last = i;
         continue;
@@ -109,14 +167,17 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
       break;
     }
     i = last;
+    number = contiguous ? text.substr(first_char, last - first_char) : std::string_view(spaced);
     if (number.empty() || number == "+" || number == "-" || number == "." ||
         number == "+." || number == "-.")
       fail(file, line, w.begin, std::string("word '") + letter + "' has no number");
-    const char* first = number.data() + (number[0] == '+' ? 1 : 0);
     double v = 0;
-    const auto res = std::from_chars(first, number.data() + number.size(), v);
-    if (res.ec != std::errc() || res.ptr != number.data() + number.size() || !std::isfinite(v))
-      fail(file, line, w.begin, std::string("bad number in word '") + letter + "'");
+    if (!parse_simple_decimal(number, v)) {
+      const char* first = number.data() + (number[0] == '+' ? 1 : 0);
+      const auto res = std::from_chars(first, number.data() + number.size(), v);
+      if (res.ec != std::errc() || res.ptr != number.data() + number.size() || !std::isfinite(v))
+        fail(file, line, w.begin, std::string("bad number in word '") + letter + "'");
+    }
     w.value = v;
     w.decimals = decimals;
     w.end = static_cast<std::uint32_t>(last);
@@ -127,7 +188,6 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
     }
     b.words.push_back(w);
   }
-  return b;
 }
 
 }  // namespace volmap::nc

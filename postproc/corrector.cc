@@ -7,14 +7,15 @@
 #include <vector>
 
 #include <Eigen/LU>
+#include <Eigen/SVD>
 
 namespace volmap::post {
 namespace {
 
 // Maxima over a table's range of |value|, |slope| and |second derivative| of
 // each component's cubic Hermite interpolant, interval by interval: p'' is
-// linear on an interval (its maximum is at an end), |p'| <= max(|m0|, |m1|)
-// + h max|p''|, |p| <= max(|y0|, |y1|) + 4/27 h (|m0| + |m1|) (the Hermite
+// linear on an interval (its maximum is at an end), p' is quadratic (its
+// maximum is at an end or at its vertex), |p| <= max(|y0|, |y1|) + 4/27 h (|m0| + |m1|) (the Hermite
 // basis functions of the slopes stay below 4/27 h).
 struct ComponentMaxima {
   std::array<double, kComponentCount> value{}, slope{}, second{};
@@ -32,7 +33,15 @@ void add_table_maxima(const AxisErrorTable& t, ComponentMaxima& b) {
       const double d = (y1 - y0) / h;
       const double p2 = std::max(std::abs(6 * d - 4 * m0 - 2 * m1), std::abs(-6 * d + 2 * m0 + 4 * m1)) / h;
       b.second[k] = std::max(b.second[k], p2);
-      b.slope[k] = std::max(b.slope[k], std::max(std::abs(m0), std::abs(m1)) + h * p2);
+      // p'(s) = a s^2 + b s + m0 on s in [0, 1]: its largest size is at an
+      // end or at the vertex.
+      const double qa = (6 * (y0 - y1) / h + 3 * (m0 + m1)), qb = (6 * d - 4 * m0 - 2 * m1);
+      double p1 = std::max(std::abs(m0), std::abs(m1));
+      if (qa != 0) {
+        const double sv = -qb / (2 * qa);
+        if (sv > 0 && sv < 1) p1 = std::max(p1, std::abs((qa * sv + qb) * sv + m0));
+      }
+      b.slope[k] = std::max(b.slope[k], p1);
       b.value[k] = std::max(b.value[k], std::max(std::abs(y0), std::abs(y1)) +
                                             4.0 / 27.0 * h * (std::abs(m0) + std::abs(m1)));
     }
@@ -42,6 +51,10 @@ void add_table_maxima(const AxisErrorTable& t, ComponentMaxima& b) {
 double norm3(const std::array<double, kComponentCount>& v, int first) {
   const auto f = static_cast<std::size_t>(first);
   return std::sqrt(v[f] * v[f] + v[f + 1] * v[f + 1] + v[f + 2] * v[f + 2]);
+}
+
+double operator_norm(const Eigen::Matrix3d& A) {
+  return Eigen::JacobiSVD<Eigen::Matrix3d>(A).singularValues()(0);
 }
 
 }  // namespace
@@ -135,12 +148,12 @@ void Corrector::compute_bounds(const Machine& machine, const ErrorSet& errors) {
   double k1 = 0.0, k2 = 0.0;
   for (std::size_t j = 0; j < lv.size(); ++j) {
     const ComponentMaxima& m = maxima[static_cast<std::size_t>(lv[j].axis)];
-    const double dr = d_lever[j].norm();  // Frobenius: bounds the operator norm
+    const double dr = operator_norm(d_lever[j]);
     k1 += norm3(m.slope, 0) + norm3(m.slope, 3) * lever_max[j] + norm3(m.value, 3) * dr;
     k2 += norm3(m.second, 0) + norm3(m.second, 3) * lever_max[j] + 2 * norm3(m.slope, 3) * dr;
   }
   constexpr double kSafety = 1.5;  // terms of second order in the errors
-  const double to_machine = M_u_tip_.norm();
+  const double to_machine = operator_norm(M_u_tip_);
   lipschitz_ = kSafety * to_machine * k1;
   curvature_ = kSafety * to_machine * k2;
 }

@@ -1,7 +1,10 @@
 #include "postproc/post_program.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <string_view>
 #include <istream>
 #include <map>
 #include <memory>
@@ -68,7 +71,12 @@ class ProgramPost {
       : file_(file), out_(out), machine_(machine), errors_(errors), options_(options),
         interp_(setup, file) {}
 
-  void line(const std::string& text, int number, bool newline);
+  void line(std::string_view text, int number, bool newline);
+  /// Writes out what emit() gathered (also on failure: what was done).
+  void flush() {
+    out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
+    out_buffer_.clear();
+  }
   const PostReport& report() const { return report_; }
 
  private:
@@ -85,10 +93,25 @@ class ProgramPost {
     return interp_.state().unit_mm > 1.0 ? 5 : 4;
   }
   Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d) {
-    // Warm start from the last point corrected (the fixed point is the same,
-    // to 1e-12 mm; it takes about half the evaluations).
-    const Vector3d cmd = last_.corrector == &c ? c.command_for(nominal, d, last_.command - last_.nominal)
-                                               : c.command_for(nominal, d);
+    // Warm start from the correction of the last point corrected, moved on
+    // along the line through the last two (the fixed point is the same, to
+    // 1e-12 mm; it takes about half the evaluations).
+    Vector3d cmd;
+    if (last_.corrector == &c) {
+      Vector3d guess = last_.command - last_.nominal;
+      if (before_last_.corrector == &c && before_last_.dir == last_.dir && last_.dir == d) {
+        const Vector3d a = last_.nominal - before_last_.nominal;
+        const double a2 = a.squaredNorm();
+        if (a2 > 0) {
+          const double t = std::clamp((nominal - last_.nominal).dot(a) / a2, 0.0, 2.0);
+          guess += t * (guess - (before_last_.command - before_last_.nominal));
+        }
+      }
+      cmd = c.command_for(nominal, d, guess);
+    } else {
+      cmd = c.command_for(nominal, d);
+    }
+    before_last_ = last_;
     last_ = {&c, nominal, cmd, d};
     const double corr = (cmd - nominal).norm();
     if (!std::isfinite(corr))
@@ -97,7 +120,7 @@ class ProgramPost {
     ++report_.points_corrected;
     return cmd;
   }
-  std::vector<Piece> segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
+  const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
   // Program value of axis a for commanded machine position v.
   double program_value(int a, double v_mm, bool g53) const {
     const nc::State& s = interp_.state();
@@ -113,9 +136,10 @@ class ProgramPost {
     }
     return s;
   }
-  void emit(const std::string& text) {
-    out_ << text;
-    if (!line_ending_.empty()) out_ << line_ending_;
+  void emit(std::string_view text) {
+    out_buffer_.append(text);
+    out_buffer_.append(line_ending_);
+    if (out_buffer_.size() >= (1u << 16)) flush();
   }
 
   std::string file_;
@@ -131,16 +155,25 @@ class ProgramPost {
   ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
   int current_line_ = 0;
   std::string line_ending_;
+  std::string out_buffer_;
+  nc::Block block_;  ///< the line being read (storage reused line after line)
+  struct Pending {
+    double s0, s1;
+    Vector3d c0;
+    ApproachDirections dir0;  ///< axis directions on arrival at s0
+  };
+  std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
+  std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
   /// The last point corrected: command solves command + e(command, dir) =
   /// nominal (to 1e-12 mm).
   struct LastCorrected {
     const Corrector* corrector = nullptr;
     Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
     ApproachDirections dir{};
-  } last_;
+  } last_, before_last_;
 };
 
-std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
+const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                         const Vector3d& start_cmd) {
   const double tol = options_.tolerance_mm;
   // Initial pieces: arcs so that the chord error is below tol / 4.
@@ -151,13 +184,10 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
     const double max_step = r > tol / 4 ? 2.0 * std::acos(1.0 - (tol / 4) / r) : M_PI / 2;
     n0 = std::max(4, static_cast<int>(std::ceil(std::abs(g.sweep) / max_step)));
   }
-  std::vector<Piece> done;
-  struct Pending {
-    double s0, s1;
-    Vector3d c0;
-    ApproachDirections dir0;  ///< axis directions on arrival at s0
-  };
-  std::vector<Pending> stack;
+  std::vector<Piece>& done = pieces_;
+  std::vector<Pending>& stack = stack_;
+  done.clear();
+  stack.clear();
   Vector3d c_prev = start_cmd;
   double s_prev = 0.0;
   constexpr int kMaxPieces = 1 << 16;
@@ -229,17 +259,18 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
   return done;
 }
 
-void ProgramPost::line(const std::string& raw, int number, bool newline) {
+void ProgramPost::line(std::string_view raw, int number, bool newline) {
   current_line_ = number;
   ++report_.lines;
   // The line ending goes out as it came in (CRLF stays CRLF; a last line
   // without a newline stays without one).
   const bool cr = !raw.empty() && raw.back() == '\r';
-  const std::string text = cr ? raw.substr(0, raw.size() - 1) : raw;
+  const std::string_view text = cr ? raw.substr(0, raw.size() - 1) : raw;
   line_ending_.clear();
   if (cr) line_ending_.push_back('\r');
   if (newline) line_ending_.push_back('\n');
-  const nc::Block b = nc::lex_block(text, number, file_);
+  nc::lex_block_into(text, number, file_, block_);
+  const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
   nc::BlockEffect fx;
   interp_.execute(b, fx);
@@ -273,7 +304,8 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
   const bool lower = nc::block_uses_lowercase(b);
   const bool spaces = nc::block_uses_spaces(b);
   const int dec = decimals();
-  const double half_unit = 0.5 * std::pow(10.0, -dec);
+  static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
+  const double half_unit = dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
 
   // Indices of the words this block states.
   auto index_of = [&](char L) {
@@ -379,7 +411,7 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
     throw InputError(file_, number, "a feed move and a stop code (M0/M1/M2/M30/M60) in one block; "
                                     "put the stop code on its own line");
   const Vector3d start_cmd = emitted_mm_;
-  const std::vector<Piece> pieces = segment(c, m, start_cmd);
+  const std::vector<Piece>& pieces = segment(c, m, start_cmd);
   const bool arc = m.kind == nc::MotionKind::kArc;
   // A straight move whose end needs no change stays as written.
   if (!arc && pieces.size() == 1) {
@@ -423,12 +455,12 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
     return w;
   };
   if (!insert.empty() && spaces) insert += ' ';
-  insert += words_for(pieces[0].command_mm, 0.0, pieces[0].s_end);
+  std::string previous_words = words_for(pieces[0].command_mm, 0.0, pieces[0].s_end);
+  insert += previous_words;
   edit.insert = insert;
   emit(nc::apply_edit(b, edit));
   ++report_.lines_changed;
   emitted_mm_ = pieces[0].command_mm;
-  std::string previous_words = words_for(pieces[0].command_mm, 0.0, pieces[0].s_end);
   for (size_t k = 1; k < pieces.size(); ++k) {
     const std::string w = words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end);
     // A piece below the output resolution (a lost-motion step at a
@@ -454,12 +486,40 @@ PostReport post_program(std::istream& in, const std::string& in_name, std::ostre
                         const nc::ProgramSetup& setup, const PostOptions& options) {
   if (!(options.tolerance_mm > 0)) throw std::invalid_argument("--tolerance-um must be positive");
   ProgramPost post(in_name, out, machine, errors, setup, options);
-  std::string text;
+  // Lines out of a large buffer (getline's per-line work and copies avoided);
+  // the buffer grows only to hold the longest line.
+  std::vector<char> buf(1 << 16);
+  std::size_t begin = 0, end = 0;
+  bool eof = false;
   int number = 0;
-  while (std::getline(in, text)) {
-    ++number;
-    post.line(text, number, !in.eof());
+  try {
+    for (;;) {
+      const char* nl = static_cast<const char*>(std::memchr(buf.data() + begin, '\n', end - begin));
+      if (nl) {
+        const auto at = static_cast<std::size_t>(nl - buf.data());
+        post.line(std::string_view(buf.data() + begin, at - begin), ++number, true);
+        begin = at + 1;
+        continue;
+      }
+      if (eof) {
+        if (begin < end) post.line(std::string_view(buf.data() + begin, end - begin), ++number, false);
+        break;
+      }
+      const std::size_t rest = end - begin;
+      std::memmove(buf.data(), buf.data() + begin, rest);
+      begin = 0;
+      end = rest;
+      if (end == buf.size()) buf.resize(2 * buf.size());
+      in.read(buf.data() + end, static_cast<std::streamsize>(buf.size() - end));
+      const auto got = static_cast<std::size_t>(in.gcount());
+      end += got;
+      if (got == 0) eof = true;
+    }
+  } catch (...) {
+    post.flush();
+    throw;
   }
+  post.flush();
   return post.report();
 }
 
