@@ -112,7 +112,7 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     if (c == '[')
       fail(file, line, i,
            "[ ] expressions are not supported; output literal numbers from CAM");
-    const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    const char letter = c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;  // ASCII toupper
     if (letter == 'O')
       fail(file, line, i,
            "O-word control flow (subroutines, loops, conditionals) is not supported; "

@@ -79,11 +79,23 @@ bool block_uses_spaces(const Block& b) {
 }
 
 std::string apply_edit(const Block& b, const BlockEdit& edit) {
-  std::vector<int> remove = edit.remove;
-  std::sort(remove.begin(), remove.end());
+  std::string out;
+  apply_edit(b, edit, out);
+  return out;
+}
+
+void apply_edit(const Block& b, const BlockEdit& edit, std::string& out) {
+  std::vector<int> sorted;
+  const std::vector<int>* removep = &edit.remove;
+  if (!std::is_sorted(edit.remove.begin(), edit.remove.end())) {
+    sorted = edit.remove;
+    std::sort(sorted.begin(), sorted.end());
+    removep = &sorted;
+  }
+  const std::vector<int>& remove = *removep;
   const std::string& t = b.text;
   const bool spaces = block_uses_spaces(b);
-  std::string out;
+  out.clear();
   size_t pos = 0;
   bool inserted = edit.insert.empty();
   for (int idx : remove) {
@@ -107,7 +119,6 @@ std::string apply_edit(const Block& b, const BlockEdit& edit) {
     pos = at;
   }
   out.append(t, pos, std::string::npos);
-  return out;
 }
 
 }  // namespace volmap::nc

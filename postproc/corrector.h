@@ -40,6 +40,13 @@ class Corrector {
   /// error (mm); 0 for an axis without bidirectional data.
   double play_width_mm(int a, const Eigen::Vector3d& p_machine_mm) const;
   bool bidirectional(int a) const { return bidirectional_[static_cast<size_t>(a)]; }
+  /// Whether the error is the same function under both direction sets (they
+  /// differ only for axes without bidirectional data).
+  bool same_error(const ApproachDirections& a, const ApproachDirections& b) const {
+    for (std::size_t k = 0; k < 3; ++k)
+      if (bidirectional_[k] && a[k] != b[k]) return false;
+    return true;
+  }
 
   /// The commanded position whose actual tip is p_nominal: the fixed point
   /// of x = p - e(x) to 1e-12 mm.

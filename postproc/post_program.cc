@@ -99,7 +99,8 @@ class ProgramPost {
     Vector3d cmd;
     if (last_.corrector == &c) {
       Vector3d guess = last_.command - last_.nominal;
-      if (before_last_.corrector == &c && before_last_.dir == last_.dir && last_.dir == d) {
+      if (before_last_.corrector == &c && c.same_error(before_last_.dir, last_.dir) &&
+          c.same_error(last_.dir, d)) {
         const Vector3d a = last_.nominal - before_last_.nominal;
         const double a2 = a.squaredNorm();
         if (a2 > 0) {
@@ -127,14 +128,13 @@ class ProgramPost {
     if (s.absolute) return (v_mm - (g53 ? 0.0 : interp_.work_offset()[a])) / s.unit_mm;
     return (v_mm - emitted_mm_[a]) / s.unit_mm;
   }
-  std::string axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces) {
-    std::string s;
+  void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, std::string& s) {
+    const std::size_t start = s.size();
     for (int a = 0; a < 3; ++a) {
-      if (!s.empty() && spaces) s += ' ';
+      if (s.size() > start && spaces) s += ' ';
       s += lower ? "xyz"[a] : "XYZ"[a];
       s += nc::format_number(program_value(a, cmd[a], g53), decimals());
     }
-    return s;
   }
   void emit(std::string_view text) {
     out_buffer_.append(text);
@@ -164,6 +164,8 @@ class ProgramPost {
   };
   std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
   std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
+  nc::BlockEdit edit_;          ///< scratch of the writer (storage reused)
+  std::string words_, previous_words_, edited_;
   /// The last point corrected: command solves command + e(command, dir) =
   /// nominal (to 1e-12 mm).
   struct LastCorrected {
@@ -203,7 +205,15 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
       const LastCorrected start = last_;
       ApproachDirections d = directions_of(n0p, n1p, p.dir0);
       Vector3d c1 = command(c, n1p, d);
-      if (settle_directions(p.c0, c1, n0p, n1p, d)) c1 = command(c, n1p, d);
+      const ApproachDirections d_before = d;
+      if (settle_directions(p.c0, c1, n0p, n1p, d)) {
+        // A direction that changes the error (an axis with lost motion)
+        // needs the point again; others only change the bookkeeping.
+        if (c.same_error(d_before, d))
+          last_.dir = d;
+        else
+          c1 = command(c, n1p, d);
+      }
       bool ok = true;
       bool sample = true;
       if (m.kind == nc::MotionKind::kLinear) {
@@ -216,7 +226,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         // point corrected with the same directions. Only when that bound
         // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
         constexpr double kResidual = 1e-11;
-        const double dev0 = start_known && start.dir == d
+        const double dev0 = start_known && c.same_error(start.dir, d)
                                 ? kResidual + (start.nominal - n0p).norm()
                                 : (p.c0 + c.error_at(p.c0, d) - n0p).norm();
         const double bound = std::max(dev0, kResidual) + c.chord_deviation_bound(p.c0, c1);
@@ -430,7 +440,8 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     return nc::format_number(s.feed / share, 4);
   };
   // The block itself becomes the first piece.
-  nc::BlockEdit edit;
+  nc::BlockEdit& edit = edit_;
+  edit.remove.clear();
   for (char L : {'X', 'Y', 'Z'})
     if (const int i = index_of(L); i >= 0) edit.remove.push_back(i);
   if (arc) {
@@ -443,32 +454,37 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   const bool g93 = s.feed_mode == 930;
   if (g93)
     if (const int i = index_of('F'); i >= 0) edit.remove.push_back(i);
-  std::string insert = arc ? (lower ? "g1" : "G1") : "";
+  std::string& insert = edit.insert;
+  insert.assign(arc ? (lower ? "g1" : "G1") : "");
   const bool g53 = fx.g53;
-  auto words_for = [&](const Vector3d& cmd, double s0, double s1) {
-    std::string w = axis_words(cmd, g53, lower, spaces);
+  // The words of a piece into w (storage reused: no allocation per line).
+  auto words_for = [&](const Vector3d& cmd, double s0, double s1, std::string& w) {
+    w.clear();
+    append_axis_words(cmd, g53, lower, spaces, w);
     if (g93) {
       if (spaces) w += ' ';
       w += lower ? 'f' : 'F';
       w += g93_feed(s0, s1);
     }
-    return w;
   };
   if (!insert.empty() && spaces) insert += ' ';
-  std::string previous_words = words_for(pieces[0].command_mm, 0.0, pieces[0].s_end);
+  std::string& previous_words = previous_words_;
+  std::string& w = words_;
+  words_for(pieces[0].command_mm, 0.0, pieces[0].s_end, previous_words);
   insert += previous_words;
-  edit.insert = insert;
-  emit(nc::apply_edit(b, edit));
+  nc::apply_edit(b, edit, edited_);
+  emit(edited_);
   ++report_.lines_changed;
   emitted_mm_ = pieces[0].command_mm;
   for (size_t k = 1; k < pieces.size(); ++k) {
-    const std::string w = words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end);
+    words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end, w);
     // A piece below the output resolution (a lost-motion step at a
     // reversal) would repeat the line before it: the controller cannot
     // command it, so it is not written.
     if (w == previous_words && !g93 && s.absolute) continue;
     previous_words = w;
-    std::string l = lower ? "g1" : "G1";
+    std::string& l = edited_;
+    l.assign(lower ? "g1" : "G1");
     if (spaces) l += ' ';
     l += w;
     emit(l);
