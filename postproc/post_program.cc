@@ -173,6 +173,14 @@ class ProgramPost {
     Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
     ApproachDirections dir{};
   } last_, before_last_;
+  /// The deviation of the actual tip at a piece's start (kept while a piece
+  /// is halved: the halves share their start).
+  struct StartDeviation {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+    double deviation = 0.0;
+  } start_dev_;
 };
 
 const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
@@ -226,9 +234,16 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         // point corrected with the same directions. Only when that bound
         // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
         constexpr double kResidual = 1e-11;
-        const double dev0 = start_known && c.same_error(start.dir, d)
-                                ? kResidual + (start.nominal - n0p).norm()
-                                : (p.c0 + c.error_at(p.c0, d) - n0p).norm();
+        double dev0;
+        if (start_known && c.same_error(start.dir, d)) {
+          dev0 = kResidual + (start.nominal - n0p).norm();
+        } else if (start_dev_.corrector == &c && start_dev_.command == p.c0 &&
+                   start_dev_.nominal == n0p && c.same_error(start_dev_.dir, d)) {
+          dev0 = start_dev_.deviation;  // the same start, halved again
+        } else {
+          dev0 = (p.c0 + c.error_at(p.c0, d) - n0p).norm();
+          start_dev_ = {&c, n0p, p.c0, d, dev0};
+        }
         const double bound = std::max(dev0, kResidual) + c.chord_deviation_bound(p.c0, c1);
         if (bound <= tol) sample = false;
       }
