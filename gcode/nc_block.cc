@@ -149,9 +149,9 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
         continue;
       }
       const bool sign = (d == '+' || d == '-') && last == first_char;
-      if (std::isdigit(static_cast<unsigned char>(d)) || sign || (d == '.' && !seen_point)) {
+      if ((d >= '0' && d <= '9') || sign || (d == '.' && !seen_point)) {
         if (d == '.') seen_point = true;
-        else if (seen_point && std::isdigit(static_cast<unsigned char>(d))) ++decimals;
+        else if (seen_point) ++decimals;  // a digit (a sign never follows the point)
         if (last == first_char) {
           first_char = i;  // spaces before the number: it starts here
         } else if (contiguous && i != last) {  // spaces inside the number: collect it

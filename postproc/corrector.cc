@@ -135,21 +135,31 @@ void Corrector::compute_bounds(const Machine& machine, const ErrorSet& errors) {
   u = lo;
   model_->levers(u, lv);
   std::vector<Eigen::Matrix3d> d_lever(lv.size(), Eigen::Matrix3d::Zero());
+  std::vector<Eigen::Matrix3d> d_lever_location(lv.size(), Eigen::Matrix3d::Zero());
   for (int a = 0; a < 3; ++a) {
     AxisVector us = u;
     us[a] += 1.0;
     model_->levers(us, lv_step);
-    for (std::size_t j = 0; j < lv.size(); ++j)
+    for (std::size_t j = 0; j < lv.size(); ++j) {
       d_lever[j].col(a) = lv_step[j].lever_component_mm - lv[j].lever_component_mm;
+      d_lever_location[j].col(a) = lv_step[j].lever_location_mm - lv[j].lever_location_mm;
+    }
   }
-  // First order: e = sum_j sign R_w_L (delta_j(q_j) + eps_j(q_j) x r_j(u)), so
-  //   |De v|      <= |v|   sum_j |delta'| + |eps'| |r| + |eps| |Dr|
+  // First order: e = sum_j sign R_w_L (delta_j(q_j) + eps_j(q_j) x r_j(u)
+  // + eps0_j x r0_j(u)) (eps0: the constant location tilts), so
+  //   |De v|      <= |v|   sum_j |delta'| + |eps'| |r| + |eps| |Dr| + |eps0| |Dr0|
   //   |D2e[v, v]| <= |v|^2 sum_j |delta''| + |eps''| |r| + 2 |eps'| |Dr|.
   double k1 = 0.0, k2 = 0.0;
   for (std::size_t j = 0; j < lv.size(); ++j) {
     const ComponentMaxima& m = maxima[static_cast<std::size_t>(lv[j].axis)];
     const double dr = operator_norm(d_lever[j]);
-    k1 += norm3(m.slope, 0) + norm3(m.slope, 3) * lever_max[j] + norm3(m.value, 3) * dr;
+    double eps0 = 0.0;
+    for (int c = 3; c < kComponentCount; ++c) {
+      const double v = errors.location_error(error_name_string({static_cast<Component>(c), lv[j].axis, true}));
+      eps0 += v * v;
+    }
+    k1 += norm3(m.slope, 0) + norm3(m.slope, 3) * lever_max[j] + norm3(m.value, 3) * dr +
+          std::sqrt(eps0) * operator_norm(d_lever_location[j]);
     k2 += norm3(m.second, 0) + norm3(m.second, 3) * lever_max[j] + 2 * norm3(m.slope, 3) * dr;
   }
   constexpr double kSafety = 1.5;  // terms of second order in the errors

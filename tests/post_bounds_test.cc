@@ -54,11 +54,9 @@ Box box_of(const post::Corrector& c, const Machine& m) {
   return b;
 }
 
-class Bounds : public ::testing::TestWithParam<double> {};  // tool length, mm
-
-TEST_P(Bounds, HoldOnTheExactModel) {
+void check_bounds(const ErrorSet& errors, double tool_mm) {
   const Machine m = hsu();
-  const post::Corrector c(m, hsu_errors(), GetParam(), OutsidePolicy::kError);
+  const post::Corrector c(m, errors, tool_mm, OutsidePolicy::kError);
   const double K1 = c.lipschitz_bound(), K2 = c.curvature_bound();
   ASSERT_TRUE(std::isfinite(K1) && std::isfinite(K2));
   const Box box = box_of(c, m);
@@ -69,7 +67,8 @@ TEST_P(Bounds, HoldOnTheExactModel) {
   double max_slope = 0, max_second = 0, max_chord_ratio = 0;
   const double h = 0.5;  // mm: the second difference of a C1 piecewise cubic is an average of e''
   for (int k = 0; k < 4000; ++k) {
-    Vector3d x, v = Vector3d::Random().normalized();
+    Vector3d x, v(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+    v.normalize();
     for (int a = 0; a < 3; ++a)
       x[a] = box.lo[a] + h + (box.hi[a] - box.lo[a] - 2 * h) * unit(rng);
     const ApproachDirections& d = dirs[static_cast<size_t>(k) % dirs.size()];
@@ -92,7 +91,7 @@ TEST_P(Bounds, HoldOnTheExactModel) {
   }
   std::printf("tool %g mm: Lipschitz bound %.3g (measured %.3g), curvature bound %.3g mm^-1 "
               "(measured %.3g), worst chord deviation / bound %.3f\n",
-              GetParam(), K1, max_slope, K2, max_second, max_chord_ratio);
+              tool_mm, K1, max_slope, K2, max_second, max_chord_ratio);
   EXPECT_LE(max_slope, K1);
   EXPECT_LE(max_second, K2);
   EXPECT_LE(max_chord_ratio, 1.0);
@@ -103,9 +102,24 @@ TEST_P(Bounds, HoldOnTheExactModel) {
   EXPECT_FALSE(c.in_bound_box(box.hi + Vector3d(1, 1, 1) * 50));
 }
 
+class Bounds : public ::testing::TestWithParam<double> {};  // tool length, mm
+
+TEST_P(Bounds, HoldOnTheExactModel) { check_bounds(hsu_errors(), GetParam()); }
+
 INSTANTIATE_TEST_SUITE_P(ToolLengths, Bounds, ::testing::Values(100.0, 0.0, 180.0));
 
-TEST(Bounds, WarmStartedFixedPointIsTheExactSolution) {
+// Axes without a table (their box side is their travel), and no location
+// errors.
+TEST(PostBounds, HoldWithPartialTables) {
+  ErrorSet e = hsu_errors();
+  e.axis[static_cast<size_t>(AxisName::Y)].reset();
+  check_bounds(e, 100.0);
+  e.location.clear();
+  e.axis[static_cast<size_t>(AxisName::Z)].reset();
+  check_bounds(e, 100.0);
+}
+
+TEST(PostBounds, WarmStartedFixedPointIsTheExactSolution) {
   const post::Corrector c(hsu(), hsu_errors(), 100.0, OutsidePolicy::kError);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(50, 250);
