@@ -213,28 +213,30 @@ double Corrector::play_width_mm(int a, const Eigen::Vector3d& p) const {
 Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal,
                                        const ApproachDirections& dir) const {
   if (zero_) return p_nominal;
-  return iterate(p_nominal, dir, p_nominal);
+  return iterate(p_nominal, dir, p_nominal, 1e-12);
 }
 
 Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
-                                       const Eigen::Vector3d& nearby_correction) const {
+                                       const Eigen::Vector3d& nearby_correction,
+                                       double accuracy_mm) const {
   if (zero_) return p_nominal;
-  return iterate(p_nominal, dir, p_nominal + nearby_correction);
+  return iterate(p_nominal, dir, p_nominal + nearby_correction, accuracy_mm);
 }
 
 // Fixed point of x = p - e(x): e varies by micrometres per 100 mm, so the
 // map is a strong contraction (factor L = lipschitz_bound(), about 1e-4).
 // Stops when the step is below 1e-12 mm, or, inside the bound box, when the
-// distance to the fixed point, at most L / (1 - L) times the step, is.
+// distance to the fixed point, at most L / (1 - L) times the step, is below
+// accuracy_mm.
 Eigen::Vector3d Corrector::iterate(const Eigen::Vector3d& p, const ApproachDirections& dir,
-                                   Eigen::Vector3d x) const {
+                                   Eigen::Vector3d x, double accuracy_mm) const {
   const double L = lipschitz_;
   const double factor = L < 0.5 ? L / (1.0 - L) : std::numeric_limits<double>::infinity();
   for (int k = 0; k < 21; ++k) {
     const Eigen::Vector3d next = p - error_at(x, dir);
     const double step = (next - x).norm();
     const bool done =
-        step < 1e-12 || (factor * step < 1e-12 && in_bound_box(x) && in_bound_box(next));
+        step < 1e-12 || (factor * step < accuracy_mm && in_bound_box(x) && in_bound_box(next));
     x = next;
     if (done) break;
   }

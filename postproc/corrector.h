@@ -53,9 +53,12 @@ class Corrector {
   Eigen::Vector3d command_for(const Eigen::Vector3d& p_nominal_mm,
                               const ApproachDirections& dir) const;
   /// The same, warm-started from the correction (command - nominal) of a
-  /// nearby point: usually two evaluations of e instead of four.
+  /// nearby point, to within accuracy_mm of the fixed point (certified by
+  /// the Lipschitz bound): with a good start and 1e-9 mm, one or two
+  /// evaluations of e instead of four.
   Eigen::Vector3d command_for(const Eigen::Vector3d& p_nominal_mm, const ApproachDirections& dir,
-                              const Eigen::Vector3d& nearby_correction_mm) const;
+                              const Eigen::Vector3d& nearby_correction_mm,
+                              double accuracy_mm = 1e-12) const;
 
   /// Bounds of the error field inside the box where every axis's tables
   /// hold (machine frame, any approach directions, docs/post.md "Bounds"):
@@ -85,7 +88,7 @@ class Corrector {
   Eigen::Vector3d box_lo_ = Eigen::Vector3d::Zero(), box_hi_ = Eigen::Vector3d::Zero();  ///< machine frame
   void compute_bounds(const Machine& machine, const ErrorSet& errors);
   Eigen::Vector3d iterate(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
-                          Eigen::Vector3d x) const;
+                          Eigen::Vector3d x, double accuracy_mm) const;
 };
 
 }  // namespace volmap::post

@@ -88,6 +88,10 @@ class ProgramPost {
       it = correctors_.emplace(L, std::make_unique<Corrector>(machine_, errors_, L, options_.outside)).first;
     return *it->second;
   }
+  // How close a commanded point is to the exact solution of x + e(x) = p:
+  // 1e-9 mm, at least 1e4 times finer than the output resolution (1e-4 mm
+  // or 1e-5 inch by default); 1e-12 mm for 6 decimals and more.
+  double solve_accuracy_mm() const { return decimals() <= 5 ? 1e-9 : 1e-12; }
   int decimals() const {
     if (options_.decimals >= 0) return options_.decimals;
     return interp_.state().unit_mm > 1.0 ? 5 : 4;
@@ -108,7 +112,7 @@ class ProgramPost {
           guess += t * (guess - (before_last_.command - before_last_.nominal));
         }
       }
-      cmd = c.command_for(nominal, d, guess);
+      cmd = c.command_for(nominal, d, guess, solve_accuracy_mm());
     } else {
       cmd = c.command_for(nominal, d);
     }
@@ -233,7 +237,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         // the fixed point's residual; |dev(0)| too when the start is the last
         // point corrected with the same directions. Only when that bound
         // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
-        constexpr double kResidual = 1e-11;
+        const double kResidual = 2 * solve_accuracy_mm() + 1e-12;
         double dev0;
         if (start_known && c.same_error(start.dir, d)) {
           dev0 = kResidual + (start.nominal - n0p).norm();

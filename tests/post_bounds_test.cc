@@ -134,6 +134,9 @@ TEST(PostBounds, WarmStartedFixedPointIsTheExactSolution) {
     EXPECT_LT((cold + c.error_at(cold, d) - p).norm(), 1e-11);
     EXPECT_LT((warm + c.error_at(warm, d) - p).norm(), 1e-11);
     EXPECT_LT((warm - cold).norm(), 1e-11);
+    // The post's accuracy (1e-9 mm, certified by the Lipschitz bound).
+    const Vector3d warm9 = c.command_for(p, d, c.command_for(q, d) - q, 1e-9);
+    EXPECT_LT((warm9 - cold).norm(), 1e-9);
   }
 }
 
