@@ -25,42 +25,6 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
   return b;
 }
 
-namespace {
-// Decimal digits with an optional sign and point, as the lexer collected
-// them: the exact double when the digits make an integer below 2^53 and at
-// most 22 decimals (one correctly rounded division of two exact doubles,
-// Clinger's fast path: the same value std::from_chars gives); false
-// otherwise (from_chars decides).
-bool parse_simple_decimal(std::string_view s, double& v) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  std::size_t i = 0;
-  bool negative = false;
-  if (i < s.size() && (s[i] == '+' || s[i] == '-')) negative = s[i++] == '-';
-  std::uint64_t m = 0;
-  int digits = 0, decimals = 0;
-  bool point = false;
-  for (; i < s.size(); ++i) {
-    const char c = s[i];
-    if (c == '.') {
-      if (point) return false;
-      point = true;
-      continue;
-    }
-    if (c < '0' || c > '9') return false;
-    if (m != 0 || c != '0') ++digits;
-    if (digits > 15) return false;  // below 2^53 for sure
-    m = m * 10 + static_cast<std::uint64_t>(c - '0');
-    if (point) ++decimals;
-  }
-  if (decimals > 22) return false;
-  const double r = static_cast<double>(m) / kPow10[decimals];
-  v = negative ? -r : r;
-  return true;
-}
-}  // namespace
-
 void lex_block_into(std::string_view text, int line, const std::string& file, Block& b) {
   b.text.assign(text);
   b.line = line;
@@ -142,6 +106,10 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     size_t last = i;
     bool seen_point = false;
     int decimals = 0;
+    // The value as the digits go by: mantissa, significant digits, sign.
+    std::uint64_t mantissa = 0;
+    int significant = 0;
+    bool negative = false;
     while (i < n) {
       const char d = text[i];
       if (is_space(d)) {
@@ -150,8 +118,15 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       }
       const bool sign = (d == '+' || d == '-') && last == first_char;
       if ((d >= '0' && d <= '9') || sign || (d == '.' && !seen_point)) {
-        if (d == '.') seen_point = true;
-        else if (seen_point) ++decimals;  // a digit (a sign never follows the point)
+        if (d == '.') {
+          seen_point = true;
+        } else if (d == '-' || d == '+') {
+          negative = d == '-';
+        } else {
+          if (seen_point) ++decimals;
+          if (mantissa != 0 || d != '0') ++significant;
+          mantissa = mantissa * 10 + static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
+        }
         if (last == first_char) {
           first_char = i;  // spaces before the number: it starts here
         } else if (contiguous && i != last) {  // spaces inside the number: collect it
@@ -172,7 +147,15 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
         number == "+." || number == "-.")
       fail(file, line, w.begin, std::string("word '") + letter + "' has no number");
     double v = 0;
-    if (!parse_simple_decimal(number, v)) {
+    static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                        1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                        1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+    if (significant <= 15 && decimals <= 22) {
+      // Exact: an integer below 2^53 over an exact power of ten, one
+      // correctly rounded division (Clinger), as std::from_chars gives.
+      const double r = static_cast<double>(mantissa) / kPow10[decimals];
+      v = negative ? -r : r;
+    } else {  // more digits: std::from_chars decides
       const char* first = number.data() + (number[0] == '+' ? 1 : 0);
       const auto res = std::from_chars(first, number.data() + number.size(), v);
       if (res.ec != std::errc() || res.ptr != number.data() + number.size() || !std::isfinite(v))

@@ -2,8 +2,10 @@
 // bounds (Corrector::lipschitz_bound, curvature_bound, chord_deviation_bound)
 // measured on the exact HTM model, the warm-started fixed point, and the
 // integer fast path of format_number against fmt.
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 
 #include <fmt/format.h>
@@ -11,6 +13,7 @@
 
 #include "core/errors_csv.h"
 #include "core/machine_json.h"
+#include "gcode/nc_block.h"
 #include "gcode/nc_writer.h"
 #include "postproc/corrector.h"
 #include "tests/support/test_paths.h"
@@ -162,6 +165,32 @@ TEST(NcWriterFast, FormatNumberEqualsFmt) {
   EXPECT_EQ(nc::format_number(0.00005, 4), fmt::format("{:.4f}", 0.00005));
   EXPECT_EQ(nc::format_number(1e12, 4), "1000000000000");
   EXPECT_EQ(checked, 200000);
+}
+
+// The lexer's one-pass decimal parser gives std::from_chars's value, bit for
+// bit: signs, leading zeros, no integer part, spaces inside, 1 to 25 digits.
+TEST(NcBlockFast, NumbersEqualFromChars) {
+  std::mt19937_64 rng(5);
+  for (int k = 0; k < 200000; ++k) {
+    std::string digits;
+    const int n_int = static_cast<int>(rng() % 12), n_frac = static_cast<int>(rng() % 14);
+    for (int i = 0; i < n_int; ++i) digits += static_cast<char>('0' + rng() % 10);
+    std::string number = digits;
+    if (n_frac > 0 || n_int == 0) {
+      number += '.';
+      for (int i = 0; i < std::max(n_frac, 1); ++i) number += static_cast<char>('0' + rng() % 10);
+    }
+    const int sign = static_cast<int>(rng() % 3);
+    const std::string clean = (sign == 1 ? "-" : "") + number;
+    std::string written = (sign == 1 ? "-" : sign == 2 ? "+" : "") + number;
+    if (k % 7 == 0 && written.size() > 2) written.insert(1 + rng() % (written.size() - 1), " ");
+    double want = 0;
+    const auto res = std::from_chars(clean.data(), clean.data() + clean.size(), want);
+    ASSERT_EQ(res.ec, std::errc()) << clean;
+    const nc::Block b = nc::lex_block("X" + written + " Y1", 1, "t.ngc");
+    ASSERT_EQ(b.words.size(), 2u) << written;
+    ASSERT_EQ(std::memcmp(&b.words[0].value, &want, sizeof want), 0) << written << " " << b.words[0].value;
+  }
 }
 
 }  // namespace
