@@ -239,8 +239,10 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
         const double kResidual = 2 * solve_accuracy_mm() + 1e-12;
         double dev0;
+        bool dev0_exact = true;  // else an upper bound only
         if (start_known && c.same_error(start.dir, d)) {
           dev0 = kResidual + (start.nominal - n0p).norm();
+          dev0_exact = false;
         } else if (start_dev_.corrector == &c && start_dev_.command == p.c0 &&
                    start_dev_.nominal == n0p && c.same_error(start_dev_.dir, d)) {
           dev0 = start_dev_.deviation;  // the same start, halved again
@@ -248,8 +250,17 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
           dev0 = (p.c0 + c.error_at(p.c0, d) - n0p).norm();
           start_dev_ = {&c, n0p, p.c0, d, dev0};
         }
-        const double bound = std::max(dev0, kResidual) + c.chord_deviation_bound(p.c0, c1);
+        const double chord = c.chord_deviation_bound(p.c0, c1);
+        const double bound = std::max(dev0, kResidual) + chord;
         if (bound <= tol) sample = false;
+        // The other way round: at t = 1/4 the deviation is at least
+        // 3/4 |dev(0)| - 1/4 |dev(1)| - 3/32 K |c1 - c0|^2. When that exceeds
+        // the tolerance (a lost-motion step at the start), the sample at 1/4
+        // would fail: the piece is split without evaluating it.
+        if (sample && dev0_exact && 0.75 * dev0 - kResidual - 0.75 * chord - 1e-12 > tol) {
+          sample = false;
+          ok = false;
+        }
       }
       for (double t : {0.25, 0.5, 0.75}) {
         if (!sample) break;
