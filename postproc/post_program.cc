@@ -99,7 +99,7 @@ class ProgramPost {
   Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d) {
     // Warm start from the correction of the last point corrected, moved on
     // along the line through the last two (the fixed point is the same, to
-    // 1e-12 mm; it takes about half the evaluations).
+    // solve_accuracy_mm(); it takes a third to a half of the evaluations).
     Vector3d cmd;
     if (last_.corrector == &c) {
       Vector3d guess = last_.command - last_.nominal;
@@ -171,7 +171,7 @@ class ProgramPost {
   nc::BlockEdit edit_;          ///< scratch of the writer (storage reused)
   std::string words_, previous_words_, edited_;
   /// The last point corrected: command solves command + e(command, dir) =
-  /// nominal (to 1e-12 mm).
+  /// nominal (to solve_accuracy_mm()).
   struct LastCorrected {
     const Corrector* corrector = nullptr;
     Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
