@@ -3,6 +3,8 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <string>
 
 #include "core/input_error.h"
 
@@ -19,8 +21,17 @@ bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
 
 Block lex_block(std::string_view text, int line, const std::string& file) {
   Block b;
-  b.text = std::string(text);
+  lex_block_into(text, line, file, b);
+  return b;
+}
+
+void lex_block_into(std::string_view text, int line, const std::string& file, Block& b) {
+  b.text.assign(text);
   b.line = line;
+  b.block_delete = false;
+  b.percent = false;
+  b.words.clear();
+  b.comment.clear();
   size_t i = 0;
   const size_t n = text.size();
   auto skip_space = [&] {
@@ -33,7 +44,7 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
     skip_space();
     if (i < n && text[i] != ';' && text[i] != '(')
       fail(file, line, i, "text after '%' on the program delimiter line; put it on a line of its own");
-    return b;
+    return;
   }
   if (i < n && text[i] == '/') {
     b.block_delete = true;
@@ -65,7 +76,7 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
     if (c == '[')
       fail(file, line, i,
            "[ ] expressions are not supported; output literal numbers from CAM");
-    const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    const char letter = c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;  // ASCII toupper
     if (letter == 'O')
       fail(file, line, i,
            "O-word control flow (subroutines, loops, conditionals) is not supported; "
@@ -86,22 +97,44 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
       if (k < n && text[k] == '[')
         fail(file, line, k, "[ ] expressions are not supported; output literal numbers from CAM");
     }
-    // The number: sign, digits, point; spaces allowed between its characters.
-    std::string number;
+    // The number: sign, digits, point; spaces allowed between its characters
+    // (collected into `number` only when there are such spaces).
+    std::string_view number;
+    std::string spaced;
+    size_t first_char = i;
+    bool contiguous = true;
     size_t last = i;
     bool seen_point = false;
     int decimals = 0;
+    // The value as the digits go by: mantissa, significant digits, sign.
+    std::uint64_t mantissa = 0;
+    int significant = 0;
+    bool negative = false;
     while (i < n) {
       const char d = text[i];
       if (is_space(d)) {
         ++i;
         continue;
       }
-      const bool sign = (d == '+' || d == '-') && number.empty();
-      if (std::isdigit(static_cast<unsigned char>(d)) || sign || (d == '.' && !seen_point)) {
-        if (d == '.') seen_point = true;
-        else if (seen_point && std::isdigit(static_cast<unsigned char>(d))) ++decimals;
-        number += d;
+      const bool sign = (d == '+' || d == '-') && last == first_char;
+      if ((d >= '0' && d <= '9') || sign || (d == '.' && !seen_point)) {
+        if (d == '.') {
+          seen_point = true;
+        } else if (d == '-' || d == '+') {
+          negative = d == '-';
+        } else {
+          if (seen_point) ++decimals;
+          if (mantissa != 0 || d != '0') ++significant;
+          mantissa = mantissa * 10 + static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
+        }
+        if (last == first_char) {
+          first_char = i;  // spaces before the number: it starts here
+        } else if (contiguous && i != last) {  // spaces inside the number: collect it
+          contiguous = false;
+          spaced.assign(text.substr(first_char, last - first_char));
+          std::erase_if(spaced, is_space);
+        }
+        if (!contiguous) spaced += d;
         ++i;
         last = i;
         continue;
@@ -109,14 +142,25 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
       break;
     }
     i = last;
+    number = contiguous ? text.substr(first_char, last - first_char) : std::string_view(spaced);
     if (number.empty() || number == "+" || number == "-" || number == "." ||
         number == "+." || number == "-.")
       fail(file, line, w.begin, std::string("word '") + letter + "' has no number");
-    const char* first = number.data() + (number[0] == '+' ? 1 : 0);
     double v = 0;
-    const auto res = std::from_chars(first, number.data() + number.size(), v);
-    if (res.ec != std::errc() || res.ptr != number.data() + number.size() || !std::isfinite(v))
-      fail(file, line, w.begin, std::string("bad number in word '") + letter + "'");
+    static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                        1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                        1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+    if (significant <= 15 && decimals <= 22) {
+      // Exact: an integer below 2^53 over an exact power of ten, one
+      // correctly rounded division (Clinger), as std::from_chars gives.
+      const double r = static_cast<double>(mantissa) / kPow10[decimals];
+      v = negative ? -r : r;
+    } else {  // more digits: std::from_chars decides
+      const char* first = number.data() + (number[0] == '+' ? 1 : 0);
+      const auto res = std::from_chars(first, number.data() + number.size(), v);
+      if (res.ec != std::errc() || res.ptr != number.data() + number.size() || !std::isfinite(v))
+        fail(file, line, w.begin, std::string("bad number in word '") + letter + "'");
+    }
     w.value = v;
     w.decimals = decimals;
     w.end = static_cast<std::uint32_t>(last);
@@ -127,7 +171,6 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
     }
     b.words.push_back(w);
   }
-  return b;
 }
 
 }  // namespace volmap::nc

@@ -45,5 +45,8 @@ struct Block {
 /// O-word control flow, # parameters, [ ] expressions, a letter without a
 /// number, an unclosed comment, a character that is not G-code.
 Block lex_block(std::string_view text, int line, const std::string& file);
+/// The same into an existing block, reusing its storage (no allocation per
+/// line once the buffers have grown: the streaming post's form).
+void lex_block_into(std::string_view text, int line, const std::string& file, Block& b);
 
 }  // namespace volmap::nc

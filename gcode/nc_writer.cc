@@ -3,13 +3,56 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 
 #include <fmt/format.h>
 
 namespace volmap::nc {
 
+namespace {
+// Fast path of format_number: value x 10^decimals rounded to an integer and
+// printed with its decimal point, when that integer is certainly the
+// correctly rounded one (the scaled value is not within 1e-6 of a tie and
+// below 1e9). The product carries at most one rounding (relative 1.1e-16),
+// far less than the margin, so the digits equal fmt's correctly rounded
+// ones. Otherwise (ties, huge values, more than 9 decimals) fmt decides.
+bool format_fixed_fast(double value, int decimals, std::string& s) {
+  static constexpr double kPow10[] = {1, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
+  if (decimals < 0 || decimals > 9) return false;
+  const double scaled = std::abs(value) * kPow10[decimals];
+  if (!(scaled < 1e9)) return false;  // NaN, infinities and large values too
+  const double r = std::floor(scaled + 0.5);
+  if (std::abs(std::abs(scaled - r) - 0.5) < 1e-6) return false;
+  auto k = static_cast<std::uint64_t>(r);
+  char buf[32];
+  char* end = buf + sizeof buf;
+  char* p = end;
+  int d = 0;
+  // Fraction digits, trailing zeros dropped.
+  bool any = false;
+  for (; d < decimals; ++d) {
+    const char digit = static_cast<char>('0' + k % 10);
+    k /= 10;
+    if (!any && digit == '0') continue;
+    any = true;
+    *--p = digit;
+  }
+  if (any) *--p = '.';
+  do {
+    *--p = static_cast<char>('0' + k % 10);
+    k /= 10;
+  } while (k != 0);
+  const bool zero = !any && p[0] == '0' && p + 1 == end;
+  if (value < 0 && !zero) *--p = '-';
+  s.assign(p, static_cast<std::size_t>(end - p));
+  return true;
+}
+}  // namespace
+
 std::string format_number(double value, int decimals) {
-  std::string s = fmt::format("{:.{}f}", value, decimals);
+  std::string s;
+  if (format_fixed_fast(value, decimals, s)) return s;
+  s = fmt::format("{:.{}f}", value, decimals);
   if (s.find('.') != std::string::npos) {
     while (s.back() == '0') s.pop_back();
     if (s.back() == '.') s.pop_back();
@@ -36,11 +79,23 @@ bool block_uses_spaces(const Block& b) {
 }
 
 std::string apply_edit(const Block& b, const BlockEdit& edit) {
-  std::vector<int> remove = edit.remove;
-  std::sort(remove.begin(), remove.end());
+  std::string out;
+  apply_edit(b, edit, out);
+  return out;
+}
+
+void apply_edit(const Block& b, const BlockEdit& edit, std::string& out) {
+  std::vector<int> sorted;
+  const std::vector<int>* removep = &edit.remove;
+  if (!std::is_sorted(edit.remove.begin(), edit.remove.end())) {
+    sorted = edit.remove;
+    std::sort(sorted.begin(), sorted.end());
+    removep = &sorted;
+  }
+  const std::vector<int>& remove = *removep;
   const std::string& t = b.text;
   const bool spaces = block_uses_spaces(b);
-  std::string out;
+  out.clear();
   size_t pos = 0;
   bool inserted = edit.insert.empty();
   for (int idx : remove) {
@@ -64,7 +119,6 @@ std::string apply_edit(const Block& b, const BlockEdit& edit) {
     pos = at;
   }
   out.append(t, pos, std::string::npos);
-  return out;
 }
 
 }  // namespace volmap::nc

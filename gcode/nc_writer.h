@@ -25,6 +25,8 @@ struct BlockEdit {
 /// space before it with it; inserted text gets a space before it when the
 /// line separates its words with spaces.
 std::string apply_edit(const Block& b, const BlockEdit& edit);
+/// The same into `out` (replaced; its storage reused).
+void apply_edit(const Block& b, const BlockEdit& edit, std::string& out);
 
 /// Upper or lower case as the block writes its letters (first letter word).
 bool block_uses_lowercase(const Block& b);

@@ -40,10 +40,41 @@ class Corrector {
   /// error (mm); 0 for an axis without bidirectional data.
   double play_width_mm(int a, const Eigen::Vector3d& p_machine_mm) const;
   bool bidirectional(int a) const { return bidirectional_[static_cast<size_t>(a)]; }
+  /// Whether the error is the same function under both direction sets (they
+  /// differ only for axes without bidirectional data).
+  bool same_error(const ApproachDirections& a, const ApproachDirections& b) const {
+    for (std::size_t k = 0; k < 3; ++k)
+      if (bidirectional_[k] && a[k] != b[k]) return false;
+    return true;
+  }
 
-  /// The commanded position whose actual tip is p_nominal (|residual| < 1e-9 mm).
+  /// The commanded position whose actual tip is p_nominal: the fixed point
+  /// of x = p - e(x) to 1e-12 mm.
   Eigen::Vector3d command_for(const Eigen::Vector3d& p_nominal_mm,
                               const ApproachDirections& dir) const;
+  /// The same, warm-started from the correction (command - nominal) of a
+  /// nearby point, to within accuracy_mm of the fixed point (certified by
+  /// the Lipschitz bound): with a good start and 1e-9 mm, one or two
+  /// evaluations of e instead of four.
+  Eigen::Vector3d command_for(const Eigen::Vector3d& p_nominal_mm, const ApproachDirections& dir,
+                              const Eigen::Vector3d& nearby_correction_mm,
+                              double accuracy_mm = 1e-12) const;
+
+  /// Bounds of the error field inside the box where every axis's tables
+  /// hold (machine frame, any approach directions, docs/post.md "Bounds"):
+  ///   |De(x) v| <= lipschitz_bound() |v|,  |D2e(x)[v, v]| <= curvature_bound() |v|^2.
+  /// From the tables' per-interval maxima of |value|, |slope| and |second
+  /// derivative| and the three-axis chain's levers (affine in the axes):
+  /// first order, times a safety factor of 1.5 for the terms of second
+  /// order in the errors (relative 1e-4 on a real machine).
+  double lipschitz_bound() const { return lipschitz_; }
+  double curvature_bound() const { return curvature_; }
+  /// Whether p (machine frame) lies inside that box.
+  bool in_bound_box(const Eigen::Vector3d& p_machine_mm) const;
+  /// Bound of the deviation from the chord, max over t of
+  /// |e(c0 + t (c1 - c0)) - ((1 - t) e(c0) + t e(c1))| <= K |c1 - c0|^2 / 8,
+  /// or +infinity when c0 or c1 lies outside the box.
+  double chord_deviation_bound(const Eigen::Vector3d& c0, const Eigen::Vector3d& c1) const;
   /// True when the machine has no errors at all (the output must equal the input).
   bool zero() const { return zero_; }
 
@@ -53,6 +84,11 @@ class Corrector {
   Eigen::Vector3d axis_shift_mm_;  ///< tool length compensation of this tool
   bool zero_ = false;
   std::array<bool, 3> bidirectional_{};
+  double lipschitz_ = 0.0, curvature_ = 0.0;
+  Eigen::Vector3d box_lo_ = Eigen::Vector3d::Zero(), box_hi_ = Eigen::Vector3d::Zero();  ///< machine frame
+  void compute_bounds(const Machine& machine, const ErrorSet& errors);
+  Eigen::Vector3d iterate(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
+                          Eigen::Vector3d x, double accuracy_mm) const;
 };
 
 }  // namespace volmap::post

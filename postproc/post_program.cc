@@ -1,7 +1,10 @@
 #include "postproc/post_program.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <string_view>
 #include <istream>
 #include <map>
 #include <memory>
@@ -68,7 +71,12 @@ class ProgramPost {
       : file_(file), out_(out), machine_(machine), errors_(errors), options_(options),
         interp_(setup, file) {}
 
-  void line(const std::string& text, int number, bool newline);
+  void line(std::string_view text, int number, bool newline);
+  /// Writes out what emit() gathered (also on failure: what was done).
+  void flush() {
+    out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
+    out_buffer_.clear();
+  }
   const PostReport& report() const { return report_; }
 
  private:
@@ -80,12 +88,36 @@ class ProgramPost {
       it = correctors_.emplace(L, std::make_unique<Corrector>(machine_, errors_, L, options_.outside)).first;
     return *it->second;
   }
+  // How close a commanded point is to the exact solution of x + e(x) = p:
+  // 1e-9 mm, at least 1e4 times finer than the output resolution (1e-4 mm
+  // or 1e-5 inch by default); 1e-12 mm for 6 decimals and more.
+  double solve_accuracy_mm() const { return decimals() <= 5 ? 1e-9 : 1e-12; }
   int decimals() const {
     if (options_.decimals >= 0) return options_.decimals;
     return interp_.state().unit_mm > 1.0 ? 5 : 4;
   }
   Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d) {
-    const Vector3d cmd = c.command_for(nominal, d);
+    // Warm start from the correction of the last point corrected, moved on
+    // along the line through the last two (the fixed point is the same, to
+    // solve_accuracy_mm(); it takes a third to a half of the evaluations).
+    Vector3d cmd;
+    if (last_.corrector == &c) {
+      Vector3d guess = last_.command - last_.nominal;
+      if (before_last_.corrector == &c && c.same_error(before_last_.dir, last_.dir) &&
+          c.same_error(last_.dir, d)) {
+        const Vector3d a = last_.nominal - before_last_.nominal;
+        const double a2 = a.squaredNorm();
+        if (a2 > 0) {
+          const double t = std::clamp((nominal - last_.nominal).dot(a) / a2, 0.0, 2.0);
+          guess += t * (guess - (before_last_.command - before_last_.nominal));
+        }
+      }
+      cmd = c.command_for(nominal, d, guess, solve_accuracy_mm());
+    } else {
+      cmd = c.command_for(nominal, d);
+    }
+    before_last_ = last_;
+    last_ = {&c, nominal, cmd, d};
     const double corr = (cmd - nominal).norm();
     if (!std::isfinite(corr))
       throw InputError(file_, current_line_, "the correction is not finite here; check the errors file");
@@ -93,25 +125,25 @@ class ProgramPost {
     ++report_.points_corrected;
     return cmd;
   }
-  std::vector<Piece> segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
+  const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
   // Program value of axis a for commanded machine position v.
   double program_value(int a, double v_mm, bool g53) const {
     const nc::State& s = interp_.state();
     if (s.absolute) return (v_mm - (g53 ? 0.0 : interp_.work_offset()[a])) / s.unit_mm;
     return (v_mm - emitted_mm_[a]) / s.unit_mm;
   }
-  std::string axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces) {
-    std::string s;
+  void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, std::string& s) {
+    const std::size_t start = s.size();
     for (int a = 0; a < 3; ++a) {
-      if (!s.empty() && spaces) s += ' ';
+      if (s.size() > start && spaces) s += ' ';
       s += lower ? "xyz"[a] : "XYZ"[a];
       s += nc::format_number(program_value(a, cmd[a], g53), decimals());
     }
-    return s;
   }
-  void emit(const std::string& text) {
-    out_ << text;
-    if (!line_ending_.empty()) out_ << line_ending_;
+  void emit(std::string_view text) {
+    out_buffer_.append(text);
+    out_buffer_.append(line_ending_);
+    if (out_buffer_.size() >= (1u << 16)) flush();
   }
 
   std::string file_;
@@ -127,9 +159,35 @@ class ProgramPost {
   ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
   int current_line_ = 0;
   std::string line_ending_;
+  std::string out_buffer_;
+  nc::Block block_;  ///< the line being read (storage reused line after line)
+  struct Pending {
+    double s0, s1;
+    Vector3d c0;
+    ApproachDirections dir0;  ///< axis directions on arrival at s0
+  };
+  std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
+  std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
+  nc::BlockEdit edit_;          ///< scratch of the writer (storage reused)
+  std::string words_, previous_words_, edited_;
+  /// The last point corrected: command solves command + e(command, dir) =
+  /// nominal (to solve_accuracy_mm()).
+  struct LastCorrected {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+  } last_, before_last_;
+  /// The deviation of the actual tip at a piece's start (kept while a piece
+  /// is halved: the halves share their start).
+  struct StartDeviation {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+    double deviation = 0.0;
+  } start_dev_;
 };
 
-std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
+const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                         const Vector3d& start_cmd) {
   const double tol = options_.tolerance_mm;
   // Initial pieces: arcs so that the chord error is below tol / 4.
@@ -140,13 +198,10 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
     const double max_step = r > tol / 4 ? 2.0 * std::acos(1.0 - (tol / 4) / r) : M_PI / 2;
     n0 = std::max(4, static_cast<int>(std::ceil(std::abs(g.sweep) / max_step)));
   }
-  std::vector<Piece> done;
-  struct Pending {
-    double s0, s1;
-    Vector3d c0;
-    ApproachDirections dir0;  ///< axis directions on arrival at s0
-  };
-  std::vector<Pending> stack;
+  std::vector<Piece>& done = pieces_;
+  std::vector<Pending>& stack = stack_;
+  done.clear();
+  stack.clear();
   Vector3d c_prev = start_cmd;
   double s_prev = 0.0;
   constexpr int kMaxPieces = 1 << 16;
@@ -156,11 +211,59 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
       const Pending p = stack.back();
       stack.pop_back();
       const Vector3d n0p = nc::point_on(m, p.s0), n1p = nc::point_on(m, p.s1);
+      // Is the piece's start the last point corrected? Then its actual
+      // deviation is known without evaluating e (below).
+      const bool start_known = last_.corrector == &c && p.c0 == last_.command;
+      const LastCorrected start = last_;
       ApproachDirections d = directions_of(n0p, n1p, p.dir0);
       Vector3d c1 = command(c, n1p, d);
-      if (settle_directions(p.c0, c1, n0p, n1p, d)) c1 = command(c, n1p, d);
+      const ApproachDirections d_before = d;
+      if (settle_directions(p.c0, c1, n0p, n1p, d)) {
+        // A direction that changes the error (an axis with lost motion)
+        // needs the point again; others only change the bookkeeping.
+        if (c.same_error(d_before, d))
+          last_.dir = d;
+        else
+          c1 = command(c, n1p, d);
+      }
       bool ok = true;
+      bool sample = true;
+      if (m.kind == nc::MotionKind::kLinear) {
+        // The deviation of the actual path from the nominal line,
+        // dev(t) = x(t) + e(x(t)) - n(t) with x and n linear in t, is the
+        // chord of its end values plus a part whose second derivative is
+        // D2e[c1 - c0, c1 - c0]: |dev(t)| <= max(|dev(0)|, |dev(1)|) +
+        // K |c1 - c0|^2 / 8 (Corrector::chord_deviation_bound). |dev(1)| is
+        // the fixed point's residual; |dev(0)| too when the start is the last
+        // point corrected with the same directions. Only when that bound
+        // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
+        const double kResidual = 2 * solve_accuracy_mm() + 1e-12;
+        double dev0;
+        bool dev0_exact = true;  // else an upper bound only
+        if (start_known && c.same_error(start.dir, d)) {
+          dev0 = kResidual + (start.nominal - n0p).norm();
+          dev0_exact = false;
+        } else if (start_dev_.corrector == &c && start_dev_.command == p.c0 &&
+                   start_dev_.nominal == n0p && c.same_error(start_dev_.dir, d)) {
+          dev0 = start_dev_.deviation;  // the same start, halved again
+        } else {
+          dev0 = (p.c0 + c.error_at(p.c0, d) - n0p).norm();
+          start_dev_ = {&c, n0p, p.c0, d, dev0};
+        }
+        const double chord = c.chord_deviation_bound(p.c0, c1);
+        const double bound = std::max(dev0, kResidual) + chord;
+        if (bound <= tol) sample = false;
+        // The other way round: at t = 1/4 the deviation is at least
+        // 3/4 |dev(0)| - 1/4 |dev(1)| - 3/32 K |c1 - c0|^2. When that exceeds
+        // the tolerance (a lost-motion step at the start), the sample at 1/4
+        // would fail: the piece is split without evaluating it.
+        if (sample && dev0_exact && 0.75 * dev0 - kResidual - 0.75 * chord - 1e-12 > tol) {
+          sample = false;
+          ok = false;
+        }
+      }
       for (double t : {0.25, 0.5, 0.75}) {
+        if (!sample) break;
         const Vector3d x = p.c0 + t * (c1 - p.c0);
         const Vector3d actual = x + c.error_at(x, d);
         const Vector3d nominal = nc::point_on(m, p.s0 + t * (p.s1 - p.s0));
@@ -196,17 +299,18 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
   return done;
 }
 
-void ProgramPost::line(const std::string& raw, int number, bool newline) {
+void ProgramPost::line(std::string_view raw, int number, bool newline) {
   current_line_ = number;
   ++report_.lines;
   // The line ending goes out as it came in (CRLF stays CRLF; a last line
   // without a newline stays without one).
   const bool cr = !raw.empty() && raw.back() == '\r';
-  const std::string text = cr ? raw.substr(0, raw.size() - 1) : raw;
+  const std::string_view text = cr ? raw.substr(0, raw.size() - 1) : raw;
   line_ending_.clear();
   if (cr) line_ending_.push_back('\r');
   if (newline) line_ending_.push_back('\n');
-  const nc::Block b = nc::lex_block(text, number, file_);
+  nc::lex_block_into(text, number, file_, block_);
+  const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
   nc::BlockEffect fx;
   interp_.execute(b, fx);
@@ -240,7 +344,8 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
   const bool lower = nc::block_uses_lowercase(b);
   const bool spaces = nc::block_uses_spaces(b);
   const int dec = decimals();
-  const double half_unit = 0.5 * std::pow(10.0, -dec);
+  static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
+  const double half_unit = dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
 
   // Indices of the words this block states.
   auto index_of = [&](char L) {
@@ -346,7 +451,7 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
     throw InputError(file_, number, "a feed move and a stop code (M0/M1/M2/M30/M60) in one block; "
                                     "put the stop code on its own line");
   const Vector3d start_cmd = emitted_mm_;
-  const std::vector<Piece> pieces = segment(c, m, start_cmd);
+  const std::vector<Piece>& pieces = segment(c, m, start_cmd);
   const bool arc = m.kind == nc::MotionKind::kArc;
   // A straight move whose end needs no change stays as written.
   if (!arc && pieces.size() == 1) {
@@ -365,7 +470,8 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
     return nc::format_number(s.feed / share, 4);
   };
   // The block itself becomes the first piece.
-  nc::BlockEdit edit;
+  nc::BlockEdit& edit = edit_;
+  edit.remove.clear();
   for (char L : {'X', 'Y', 'Z'})
     if (const int i = index_of(L); i >= 0) edit.remove.push_back(i);
   if (arc) {
@@ -378,32 +484,37 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
   const bool g93 = s.feed_mode == 930;
   if (g93)
     if (const int i = index_of('F'); i >= 0) edit.remove.push_back(i);
-  std::string insert = arc ? (lower ? "g1" : "G1") : "";
+  std::string& insert = edit.insert;
+  insert.assign(arc ? (lower ? "g1" : "G1") : "");
   const bool g53 = fx.g53;
-  auto words_for = [&](const Vector3d& cmd, double s0, double s1) {
-    std::string w = axis_words(cmd, g53, lower, spaces);
+  // The words of a piece into w (storage reused: no allocation per line).
+  auto words_for = [&](const Vector3d& cmd, double s0, double s1, std::string& w) {
+    w.clear();
+    append_axis_words(cmd, g53, lower, spaces, w);
     if (g93) {
       if (spaces) w += ' ';
       w += lower ? 'f' : 'F';
       w += g93_feed(s0, s1);
     }
-    return w;
   };
   if (!insert.empty() && spaces) insert += ' ';
-  insert += words_for(pieces[0].command_mm, 0.0, pieces[0].s_end);
-  edit.insert = insert;
-  emit(nc::apply_edit(b, edit));
+  std::string& previous_words = previous_words_;
+  std::string& w = words_;
+  words_for(pieces[0].command_mm, 0.0, pieces[0].s_end, previous_words);
+  insert += previous_words;
+  nc::apply_edit(b, edit, edited_);
+  emit(edited_);
   ++report_.lines_changed;
   emitted_mm_ = pieces[0].command_mm;
-  std::string previous_words = words_for(pieces[0].command_mm, 0.0, pieces[0].s_end);
   for (size_t k = 1; k < pieces.size(); ++k) {
-    const std::string w = words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end);
+    words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end, w);
     // A piece below the output resolution (a lost-motion step at a
     // reversal) would repeat the line before it: the controller cannot
     // command it, so it is not written.
     if (w == previous_words && !g93 && s.absolute) continue;
     previous_words = w;
-    std::string l = lower ? "g1" : "G1";
+    std::string& l = edited_;
+    l.assign(lower ? "g1" : "G1");
     if (spaces) l += ' ';
     l += w;
     emit(l);
@@ -421,12 +532,40 @@ PostReport post_program(std::istream& in, const std::string& in_name, std::ostre
                         const nc::ProgramSetup& setup, const PostOptions& options) {
   if (!(options.tolerance_mm > 0)) throw std::invalid_argument("--tolerance-um must be positive");
   ProgramPost post(in_name, out, machine, errors, setup, options);
-  std::string text;
+  // Lines out of a large buffer (getline's per-line work and copies avoided);
+  // the buffer grows only to hold the longest line.
+  std::vector<char> buf(1 << 16);
+  std::size_t begin = 0, end = 0;
+  bool eof = false;
   int number = 0;
-  while (std::getline(in, text)) {
-    ++number;
-    post.line(text, number, !in.eof());
+  try {
+    for (;;) {
+      const char* nl = static_cast<const char*>(std::memchr(buf.data() + begin, '\n', end - begin));
+      if (nl) {
+        const auto at = static_cast<std::size_t>(nl - buf.data());
+        post.line(std::string_view(buf.data() + begin, at - begin), ++number, true);
+        begin = at + 1;
+        continue;
+      }
+      if (eof) {
+        if (begin < end) post.line(std::string_view(buf.data() + begin, end - begin), ++number, false);
+        break;
+      }
+      const std::size_t rest = end - begin;
+      std::memmove(buf.data(), buf.data() + begin, rest);
+      begin = 0;
+      end = rest;
+      if (end == buf.size()) buf.resize(2 * buf.size());
+      in.read(buf.data() + end, static_cast<std::streamsize>(buf.size() - end));
+      const auto got = static_cast<std::size_t>(in.gcount());
+      end += got;
+      if (got == 0) eof = true;
+    }
+  } catch (...) {
+    post.flush();
+    throw;
   }
+  post.flush();
   return post.report();
 }
 

@@ -6,8 +6,10 @@
 //  - every commanded point moves to the solution of x_cmd + e(x_cmd) = x_nom
 //    (Corrector), in the frame and units of the program (G20/G21, G90/G91,
 //    G53, G54-G59.3, tool length from G43);
-//  - feed moves (G1) are split until the actual path, sampled at 1/4, 1/2,
-//    3/4 of every piece, stays within the tolerance of the nominal line;
+//  - feed moves (G1) are split until the actual path stays within the
+//    tolerance of the nominal line: on straight pieces by a bound of the
+//    deviation along the whole piece (Corrector::chord_deviation_bound),
+//    where that bound is too large by samples at 1/4, 1/2, 3/4 of the piece;
 //    arcs (G2/G3, helices, full circles) are linearised the same way, with
 //    the chord error inside the same tolerance; under G93 every piece gets
 //    its inverse-time F so the programmed time is kept;

@@ -1,0 +1,197 @@
+// The post-processor's fast paths against the exact model: the error-field
+// bounds (Corrector::lipschitz_bound, curvature_bound, chord_deviation_bound)
+// measured on the exact HTM model, the warm-started fixed point, and the
+// integer fast path of format_number against fmt.
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "core/errors_csv.h"
+#include "core/machine_json.h"
+#include "gcode/nc_block.h"
+#include "gcode/nc_writer.h"
+#include "postproc/corrector.h"
+#include "tests/support/test_paths.h"
+
+namespace volmap {
+namespace {
+
+using Eigen::Vector3d;
+
+Machine hsu() { return load_machine_json(test::source_path("samples/machines/hsu-3axis.json")); }
+ErrorSet hsu_errors() { return load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv")); }
+
+// Every approach-direction combination the post uses (0: the mean).
+std::vector<ApproachDirections> all_directions() {
+  std::vector<ApproachDirections> out;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z)
+        out.push_back({static_cast<std::int8_t>(x), static_cast<std::int8_t>(y),
+                       static_cast<std::int8_t>(z), 0, 0, 0});
+  return out;
+}
+
+struct Box {
+  Vector3d lo, hi;
+};
+
+// The part of the machine frame where the tables hold, found by probing
+// (the bound box is private): the sample errors cover the travel.
+Box box_of(const post::Corrector& c, const Machine& m) {
+  Box b{Vector3d(1e9, 1e9, 1e9), Vector3d(-1e9, -1e9, -1e9)};
+  std::mt19937 rng(7);
+  for (int k = 0; k < 20000; ++k) {
+    Vector3d p;
+    for (int a = 0; a < 3; ++a)
+      p[a] = std::uniform_real_distribution<double>(m.limits[a].min - 400, m.limits[a].max + 400)(rng);
+    if (!c.in_bound_box(p)) continue;
+    b.lo = b.lo.cwiseMin(p);
+    b.hi = b.hi.cwiseMax(p);
+  }
+  return b;
+}
+
+void check_bounds(const ErrorSet& errors, double tool_mm) {
+  const Machine m = hsu();
+  const post::Corrector c(m, errors, tool_mm, OutsidePolicy::kError);
+  const double K1 = c.lipschitz_bound(), K2 = c.curvature_bound();
+  ASSERT_TRUE(std::isfinite(K1) && std::isfinite(K2));
+  const Box box = box_of(c, m);
+  ASSERT_TRUE((box.lo.array() < box.hi.array()).all());
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto dirs = all_directions();
+  double max_slope = 0, max_second = 0, max_chord_ratio = 0;
+  const double h = 0.5;  // mm: the second difference of a C1 piecewise cubic is an average of e''
+  for (int k = 0; k < 4000; ++k) {
+    Vector3d x, v(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+    v.normalize();
+    for (int a = 0; a < 3; ++a)
+      x[a] = box.lo[a] + h + (box.hi[a] - box.lo[a] - 2 * h) * unit(rng);
+    const ApproachDirections& d = dirs[static_cast<size_t>(k) % dirs.size()];
+    const Vector3d e0 = c.error_at(x, d), ep = c.error_at(x + h * v, d), em = c.error_at(x - h * v, d);
+    max_slope = std::max(max_slope, (ep - e0).norm() / h);
+    max_second = std::max(max_second, (ep - 2 * e0 + em).norm() / (h * h));
+    // A long chord, sampled densely: its deviation from the chord of its
+    // end values stays below the bound.
+    Vector3d c1;
+    for (int a = 0; a < 3; ++a) c1[a] = box.lo[a] + (box.hi[a] - box.lo[a]) * unit(rng);
+    const double bound = c.chord_deviation_bound(x, c1);
+    ASSERT_TRUE(std::isfinite(bound));
+    const Vector3d ex = c.error_at(x, d), e1 = c.error_at(c1, d);
+    double dev = 0;
+    for (int i = 1; i < 64; ++i) {
+      const double t = i / 64.0;
+      dev = std::max(dev, (c.error_at(x + t * (c1 - x), d) - ((1 - t) * ex + t * e1)).norm());
+    }
+    max_chord_ratio = std::max(max_chord_ratio, dev / bound);
+  }
+  std::printf("tool %g mm: Lipschitz bound %.3g (measured %.3g), curvature bound %.3g mm^-1 "
+              "(measured %.3g), worst chord deviation / bound %.3f\n",
+              tool_mm, K1, max_slope, K2, max_second, max_chord_ratio);
+  EXPECT_LE(max_slope, K1);
+  EXPECT_LE(max_second, K2);
+  EXPECT_LE(max_chord_ratio, 1.0);
+  // Useful, not vacuous: a 0.5 mm piece is far inside a 1 um tolerance.
+  EXPECT_LT(K2 * 0.25 / 8, 1e-6);
+  EXPECT_LT(K1, 1e-2);
+  // The box is the tables' range (outside it the bound is not claimed).
+  EXPECT_FALSE(c.in_bound_box(box.hi + Vector3d(1, 1, 1) * 50));
+}
+
+class Bounds : public ::testing::TestWithParam<double> {};  // tool length, mm
+
+TEST_P(Bounds, HoldOnTheExactModel) { check_bounds(hsu_errors(), GetParam()); }
+
+INSTANTIATE_TEST_SUITE_P(ToolLengths, Bounds, ::testing::Values(100.0, 0.0, 180.0));
+
+// Axes without a table (their box side is their travel), and no location
+// errors.
+TEST(PostBounds, HoldWithPartialTables) {
+  ErrorSet e = hsu_errors();
+  e.axis[static_cast<size_t>(AxisName::Y)].reset();
+  check_bounds(e, 100.0);
+  e.location.clear();
+  e.axis[static_cast<size_t>(AxisName::Z)].reset();
+  check_bounds(e, 100.0);
+}
+
+TEST(PostBounds, WarmStartedFixedPointIsTheExactSolution) {
+  const post::Corrector c(hsu(), hsu_errors(), 100.0, OutsidePolicy::kError);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(50, 250);
+  const auto dirs = all_directions();
+  for (int k = 0; k < 500; ++k) {
+    const Vector3d p(u(rng), u(rng), u(rng) * 0.8);
+    const ApproachDirections& d = dirs[static_cast<size_t>(k) % dirs.size()];
+    const Vector3d cold = c.command_for(p, d);
+    // A neighbour's correction (0.5 mm away, other directions too) as the start.
+    const Vector3d q = p + Vector3d(0.5, -0.2, 0.1);
+    const Vector3d warm = c.command_for(p, d, c.command_for(q, dirs[(static_cast<size_t>(k) + 5) % dirs.size()]) - q);
+    EXPECT_LT((cold + c.error_at(cold, d) - p).norm(), 1e-11);
+    EXPECT_LT((warm + c.error_at(warm, d) - p).norm(), 1e-11);
+    EXPECT_LT((warm - cold).norm(), 1e-11);
+    // The post's accuracy (1e-9 mm, certified by the Lipschitz bound).
+    const Vector3d warm9 = c.command_for(p, d, c.command_for(q, d) - q, 1e-9);
+    EXPECT_LT((warm9 - cold).norm(), 1e-9);
+  }
+}
+
+TEST(NcWriterFast, FormatNumberEqualsFmt) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> mag(-7, 5);
+  int checked = 0;
+  for (int k = 0; k < 200000; ++k) {
+    const int dec = static_cast<int>(rng() % 10);
+    double v = std::pow(10.0, mag(rng)) * (rng() % 2 ? 1 : -1);
+    if (k % 4 == 0) v = std::round(v * std::pow(10.0, dec)) / std::pow(10.0, dec);  // on the grid
+    if (k % 4 == 1) v = (std::round(v * std::pow(10.0, dec)) + 0.5) / std::pow(10.0, dec);  // ties
+    std::string want = fmt::format("{:.{}f}", v, dec);
+    if (want.find('.') != std::string::npos) {
+      while (want.back() == '0') want.pop_back();
+      if (want.back() == '.') want.pop_back();
+    }
+    if (want == "-0") want = "0";
+    ASSERT_EQ(nc::format_number(v, dec), want) << v << " " << dec;
+    ++checked;
+  }
+  EXPECT_EQ(nc::format_number(-0.00004, 4), "0");
+  EXPECT_EQ(nc::format_number(0.00005, 4), fmt::format("{:.4f}", 0.00005));
+  EXPECT_EQ(nc::format_number(1e12, 4), "1000000000000");
+  EXPECT_EQ(checked, 200000);
+}
+
+// The lexer's one-pass decimal parser gives std::from_chars's value, bit for
+// bit: signs, leading zeros, no integer part, spaces inside, 1 to 25 digits.
+TEST(NcBlockFast, NumbersEqualFromChars) {
+  std::mt19937_64 rng(5);
+  for (int k = 0; k < 200000; ++k) {
+    std::string digits;
+    const int n_int = static_cast<int>(rng() % 12), n_frac = static_cast<int>(rng() % 14);
+    for (int i = 0; i < n_int; ++i) digits += static_cast<char>('0' + rng() % 10);
+    std::string number = digits;
+    if (n_frac > 0 || n_int == 0) {
+      number += '.';
+      for (int i = 0; i < std::max(n_frac, 1); ++i) number += static_cast<char>('0' + rng() % 10);
+    }
+    const int sign = static_cast<int>(rng() % 3);
+    const std::string clean = (sign == 1 ? "-" : "") + number;
+    std::string written = (sign == 1 ? "-" : sign == 2 ? "+" : "") + number;
+    if (k % 7 == 0 && written.size() > 2) written.insert(1 + rng() % (written.size() - 1), " ");
+    double want = 0;
+    const auto res = std::from_chars(clean.data(), clean.data() + clean.size(), want);
+    ASSERT_EQ(res.ec, std::errc()) << clean;
+    const nc::Block b = nc::lex_block("X" + written + " Y1", 1, "t.ngc");
+    ASSERT_EQ(b.words.size(), 2u) << written;
+    ASSERT_EQ(std::memcmp(&b.words[0].value, &want, sizeof want), 0) << written << " " << b.words[0].value;
+  }
+}
+
+}  // namespace
+}  // namespace volmap
