@@ -424,7 +424,9 @@ void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
   if (!m.rapid) {
     if (feed_mode_ == 930 && !word['F' - 'A'])
       fail(1, "a feed move under G93 (inverse time) needs F in its block");
-    if (feed_ <= 0) fail(1, "a feed move with no feed rate; add F");
+    if (feed_ < 0 || (feed_ == 0 && word['F' - 'A']))
+      fail(1, "the feed rate must be positive; correct F");
+    if (feed_ == 0) fail(1, "a feed move with no feed rate; add F");
   }
   tip_mm_ = end;
   out.has_move = true;

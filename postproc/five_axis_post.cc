@@ -295,7 +295,10 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
   }
   if (feed) {
     double f;
-    const double t = std::max(time_min, 1e-9);
+    // A piece of no nominal travel (a move to where the tool already is)
+    // takes at least 6 ms: its F stays a sane number (at most 10 000 in
+    // inverse time) and whatever small motion the correction adds is slow.
+    const double t = std::max(time_min, 1e-4);
     if (want_mode == 930) {
       f = 1.0 / t;
     } else {
@@ -303,7 +306,11 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
       f = len > 0 ? len / t : 1.0;
     }
     word('F');
-    append_number(s, f, 4);
+    // Four decimals, more for a slow feed so that F never reads 0 (G93
+    // F0 is an error; a feed of 1e-5 per minute is a program's business).
+    int f_decimals = 4;
+    while (f_decimals < 9 && f > 0 && f * std::pow(10.0, f_decimals) < 1000) ++f_decimals;
+    append_number(s, f, f_decimals);
   }
   return s;
 }

@@ -109,3 +109,39 @@ TEST(FiveAxisCli, HelpListsTheFiveAxisOptions) {
 }
 
 }  // namespace
+
+namespace volmap {
+namespace {
+
+// Every F the five-axis post writes is a positive number that reads as one:
+// a slow inverse-time feed keeps its digits (never F0), a move to where the
+// tool already is gets a bounded F (at least 6 ms), and F0 or a negative F
+// in the input is refused as what it is.
+TEST(FiveAxisCli, FeedWordsArePositiveAndBounded) {
+  const std::string in = write_temp(
+      "feeds.ngc",
+      "G21 G90 G94\nG0 X10 Y0 Z30 A0 C0\nG93 G1 X11 F0.000001\nG94 G1 X11 F500\nG1 X12 A-10 F500\nM30\n");
+  const std::string out = ::testing::TempDir() + "volmap5cli_feeds_out.ngc";
+  const auto r = run_volmap("post" + kMachine + kErrors + " " + in + " -o " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream f(out);
+  int feeds = 0;
+  for (std::string line; std::getline(f, line);) {
+    const size_t at = line.find('F');
+    if (at == std::string::npos || line.find('(') != std::string::npos) continue;
+    const double v = std::strtod(line.c_str() + at + 1, nullptr);
+    ++feeds;
+    EXPECT_GT(v, 0.0) << line;
+    EXPECT_LE(v, 1e4 + 1e-9) << line;  // inverse time: at least 6 ms per piece
+  }
+  EXPECT_GT(feeds, 0);
+  for (const char* bad : {"G21 G90 G94\nG0 X10 Y0 Z30 A0 C0\nG1 X11 F0\nM30\n",
+                          "G21 G90 G94\nG0 X10 Y0 Z30 A0 C0\nG1 X11 F-5\nM30\n"}) {
+    const auto b = run_volmap("post" + kMachine + kErrors + " " + write_temp("badfeed.ngc", bad) + " -o " + out + "2");
+    EXPECT_EQ(b.status, 1);
+    EXPECT_NE(b.err.find("must be positive"), std::string::npos) << b.err;
+  }
+}
+
+}  // namespace
+}  // namespace volmap
