@@ -296,9 +296,10 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
   if (feed) {
     double f;
     // A piece of no nominal travel (a move to where the tool already is)
-    // takes at least 6 ms: its F stays a sane number (at most 10 000 in
-    // inverse time) and whatever small motion the correction adds is slow.
-    const double t = std::max(time_min, 1e-4);
+    // has no time of its own: it gets 6 ms, so that its F stays a sane
+    // number (10 000 in inverse time) and whatever small motion the
+    // correction adds is slow.
+    const double t = time_min > 0 ? time_min : 1e-4;
     if (want_mode == 930) {
       f = 1.0 / t;
     } else {
