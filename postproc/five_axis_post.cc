@@ -131,6 +131,32 @@ class FiveAxisPost {
   bool reader_newline_ = true;
   bool started_ = false;
   AxisVector u_nom_;  ///< nominal axes at the end of the last move
+  /// Whole turns added to the programmed angles of each unlimited rotary
+  /// axis (TCP input): see unwrap_turns.
+  AxisVector turns_;
+
+  // A TCP program may send an unlimited rotary axis round by a turn or more
+  // on a rapid (LinuxCNC's demos end with G0 C0 after C-399.8, unwinding a
+  // counter); the pose is the same at the nearest equivalent angle. At a
+  // rapid the programmed angle is taken as the representative within half
+  // a turn of where the axis is, and the whole turns so added stay with
+  // every later programmed angle, so feed moves sweep exactly as
+  // programmed: C never jumps by 180 degrees or more between two lines.
+  void unwrap_turns(FiveAxisMove& m) {
+    const Machine& mach = tf_.machine();
+    if (turns_.size() != mach.axis_count()) turns_ = AxisVector::Zero(mach.axis_count());
+    if (m.q1.size() != mach.axis_count()) return;
+    for (int k = 0; k < mach.axis_count(); ++k) {
+      if (!is_rotary(mach.axis_order[static_cast<size_t>(k)]) || !mach.limits[static_cast<size_t>(k)].unlimited)
+        continue;
+      if (m.rapid) {
+        const double d = m.q1[k] + turns_[k] - u_nom_[k];
+        if (std::abs(d) >= M_PI) turns_[k] -= 2.0 * M_PI * std::nearbyint(d / (2.0 * M_PI));
+      }
+      if (m.q0.size() == mach.axis_count()) m.q0[k] += turns_[k];
+      m.q1[k] += turns_[k];
+    }
+  }
   AxisVector c_;      ///< commanded axes at the end of the last move
   double residual_angle_ = 0.0;  ///< tool-axis error left there (rad)
   int out_motion_ = -1;     ///< modal motion of the output (x10), -1 unknown
@@ -457,6 +483,7 @@ void FiveAxisPost::run(FiveAxisReader& reader) {
     reader_newline_ = reader.newline();
     ++report_.lines;
     try {
+      if (l.has_move && l.move.by_angles) unwrap_turns(l.move);
       write_line(l);
     } catch (const InputError&) {
       throw;

@@ -132,6 +132,29 @@ TEST_P(RealFiveAxisProgram, PostedRs274AcceptsAndTheToolFollowsTheNominalPath) {
     EXPECT_EQ(ss.str().find("M429"), std::string::npos);
   }
 
+  // C never jumps by 180 degrees or more between consecutive lines, rapids
+  // included (the demos' own G0 C0 after C-399.8 is taken a whole turn
+  // off: the same pose).
+  {
+    std::ifstream f(out);
+    std::string line;
+    int n = 0, moves = 0;
+    double c_prev = 0;
+    bool have = false;
+    while (std::getline(f, line)) {
+      const nc::Block b = nc::lex_block(line, ++n, out);
+      if (const nc::Word* w = b.find('C')) {
+        if (have) {
+          EXPECT_LT(std::abs(w->value - c_prev), 180.0) << out << ":" << n << ": " << line;
+        }
+        c_prev = w->value;
+        have = true;
+        ++moves;
+      }
+    }
+    EXPECT_GT(moves, 100);
+  }
+
   // verify: before and after along the whole path.
   const test::CliResult v = test::run_volmap("verify --machine " + machine + " --errors " + errors +
                                              " --nominal " + in + " --program " + out + " --json");
