@@ -512,6 +512,40 @@ std::vector<Candidate> make_candidates(const Context& c) {
         }
       }
     }
+    // Angular location errors the baseline lacks (ISO 230-1 squareness of a
+    // linear axis, EC0Y; the tilt of a rotary axis's average line, EA0C):
+    // constant errors whose effect on the tool varies over the workspace
+    // through the levers. Without them a baseline lacking a squareness sent
+    // its signature to whatever else could bend to it (sag, wobble).
+    for (std::size_t idx = 0; idx < d.names.size(); ++idx) {
+      const std::string& name = d.names[idx];
+      const std::optional<ErrorName> en = parse_error_name(name);
+      if (!en || !en->location || !is_angular(en->component)) continue;
+      if (c.opt.baseline->location.count(name)) continue;
+      const Eigen::Index col = static_cast<Eigen::Index>(idx);
+      if (d.gp.col(col).cwiseAbs().maxCoeff() < 1e-12) continue;
+      const AxisName k = en->axis;
+      Candidate sq;
+      sq.effect = "squareness";
+      sq.axis = k;
+      sq.variant = name;
+      sq.build = [&d, n, col](double) {
+        Eigen::MatrixXd C(n, 1);
+        for (Eigen::Index e = 0; e < n; ++e) C(e, 0) = d.gp(e, col) * 1e-3;  // urad -> um
+        return C;
+      };
+      sq.report = [k, name](const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov, double, double, Finding& f) {
+        f.parameters = {{"error", name}, {"value_urad", num(beta[0])}};
+        f.std_errors = {{"value_urad", std::sqrt(cov(0, 0))}};
+        f.explanation = fmt::format(
+            "The location error {} ({} axis) is missing from the baseline: {:.3g} urad of squareness (a tilt of the "
+            "axis's line) fits the residuals.",
+            name, axis_str(k), beta[0]);
+      };
+      sq.plot_x = [&d, k](int i) { return d.q_user(k, i); };
+      sq.plot_label = position_name(k);
+      out.push_back(sq);
+    }
   }
   return out;
 }

@@ -587,3 +587,51 @@ TEST(ExplainCli, ToolOtherThanTheMachinesAndEmptyRecordingsAreRefused) {
 
 }  // namespace
 }  // namespace volmap
+
+namespace volmap {
+namespace {
+
+// A fixed baseline that lacks squareness errors: explain names each missing
+// location error (not a sag or a wobble standing in for them) and recovers
+// its value, read here from the block removed from the baseline.
+TEST(ExplainSamples, BaselineLackingSquarenessNamesEachMissingError) {
+  std::ifstream in(test::source_path("samples/recordings/geometry-5axis.csv"));
+  std::string text, line, names, values;
+  while (std::getline(in, line)) {
+    if (line == "EC0X,EB0Z,EA0Z") {
+      names = line;
+      std::getline(in, values);
+      continue;
+    }
+    text += line + "\n";
+  }
+  ASSERT_FALSE(values.empty());
+  std::map<std::string, double> truth;
+  {
+    std::stringstream ns(names), vs(values);
+    std::string n, v;
+    while (std::getline(ns, n, ',') && std::getline(vs, v, ',')) truth[n] = std::stod(v);
+  }
+  const std::string base = ::testing::TempDir() + "explain_test_nosq.csv";
+  std::ofstream(base) << text;
+  const std::string out = ::testing::TempDir() + "explain_test_nosq.json";
+  const test::CliResult r = test::run_volmap(
+      "explain --recordings " + test::source_path("samples/recordings/null-5axis.csv") + " --machine " +
+      test::source_path("samples/machines/lei-hsu-xyzac.json") + " --baseline " + base + " --json " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream jf(out);
+  const nlohmann::json j = nlohmann::json::parse(jf);
+  std::map<std::string, double> found;
+  for (const auto& f : j["findings"]) {
+    EXPECT_EQ(f["effect"], "squareness") << f.dump();
+    found[f["parameters"]["error"].get<std::string>()] = f["parameters"]["value_urad"].get<double>();
+  }
+  ASSERT_EQ(found.size(), truth.size()) << j["findings"].dump();
+  for (const auto& [name, value] : truth) {
+    ASSERT_TRUE(found.count(name)) << name;
+    EXPECT_NEAR(found[name], value, 1.0) << name;
+  }
+}
+
+}  // namespace
+}  // namespace volmap
