@@ -589,6 +589,14 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
     std::vector<Fitted> fits;
     for (const Candidate& c : cands) {
       if (used.count(used_key(c))) continue;
+      // Without the machine the rotary axes' lines are a guess: effects of
+      // a rotary axis (its wobble, its positioning, a sag driven by its
+      // angle) would be fitted to the guess's levers and named with
+      // confidence they do not have. Left out; notes says so.
+      if (opt.machine_assumed &&
+          ((c.axis && is_rotary(*c.axis)) || c.effect == "rotary_wobble" || c.effect == "rotary_positioning" ||
+           (c.effect == "sag" && (c.variant == "A" || c.variant == "B" || c.variant == "C"))))
+        continue;
       if (c.effect == "thermal_drift" && c.axis && design_blocked.count(axis_str(*c.axis))) continue;
       if (c.effect == "scale" && c.axis && design_blocked.count(axis_str(*c.axis))) continue;
       const auto h = hints.find(c.key());
@@ -801,7 +809,8 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
   }
   if (opt.machine_assumed && !ctx.rotary.empty())
     res.notes.push_back("no --machine: the rotary axes were taken to turn the workpiece about lines through the "
-                        "origin along X, Y or Z; give the machine that made the recording for rotary findings");
+                        "origin along X, Y or Z, so effects of the rotary axes (wobble, positioning, a sag driven "
+                        "by a rotary angle) were not tried; give the machine that made the recording for them");
   for (const std::string& s : not_estimable)
     res.notes.push_back(s + ": not estimable on this recording (the baseline already spans its columns)");
   if (opt.baseline) {
