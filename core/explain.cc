@@ -803,6 +803,17 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
                          "same readings";
         cf.remedy = remedy_for("setup_shift", "thermal_drift");
         res.confounded.push_back(cf);
+        // Confounded, not guessed: the pair is reported, not a finding.
+        // The per-run offsets stay in the final model (they are real).
+        res.notes.push_back(fmt::format(
+            "per-run offsets of {} are in the final model (largest {:.3g} um); set-up shift or drift, see "
+            "confounded",
+            f.axis ? axis_str(*f.axis) : std::string("-"), [&] {
+              double w = 0;
+              for (const auto& v : per) w = std::max(w, std::abs(v.get<double>()));
+              return w;
+            }()));
+        continue;
       }
     }
     res.findings.push_back(std::move(f));
