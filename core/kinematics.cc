@@ -160,6 +160,16 @@ Kinematics::Kinematics(Machine m) : machine_(std::move(m)) {
       throw std::invalid_argument(fmt::format(
           "machine \"{}\": the tool axis lies along rotary axis {}, which cannot tilt it",
           machine_.name, axis_char(seq[1].j->axis)));
+    // Frames of the subproblem-2 angles (rotary_solutions): e1 along the
+    // part of w2 perpendicular to w1, e2 = w1 x e1; f1 along the part of w1
+    // perpendicular to w2, f2 = w2 x f1; and the angle of the tool axis
+    // about w2 in the f frame, a constant of the machine.
+    const double g = w1_.dot(w2_);
+    e1_ = (w2_ - g * w1_).normalized();
+    e2_ = w1_.cross(e1_);
+    f1_ = (w1_ - g * w2_).normalized();
+    f2_ = w2_.cross(f1_);
+    a_angle_w2_ = atan2_axis(a_.dot(f2_), a_.dot(f1_));
   } else if (!seq.empty()) {
     throw std::invalid_argument(fmt::format(
         "machine \"{}\": the backward transformation handles zero or two rotary axes, it has {}",
@@ -249,13 +259,18 @@ Kinematics::Rotary Kinematics::rotary_solutions(const ToolPose& v_w, const AxisV
   const double ga2 = (rho2 - be * be * n2) / n2;
   if (ga2 < -1e-12) return out;  // the orientation is out of reach
   const double ga = std::sqrt(std::max(0.0, ga2));
-  const Eigen::Vector3d w2_perp = w2_ - g * w1_;
-  for (double sign : {+1.0, -1.0}) {
-    const Eigen::Vector3d z = al * w1_ + be * w2_ + sign * ga * n;
-    const Eigen::Vector3d z_perp = be * w2_perp + sign * ga * n;
-    add(subproblem1(w1_, z_perp, Q), subproblem1(w2_, a_, z));
-    if (ga == 0.0) break;  // a double root
-  }
+  // Subproblem 1 twice per solution, in closed form: with n = w1 x w2 =
+  // |w2 - g w1| e2 = -|w1 - g w2| f2, the parts of z = al w1 + be w2 + s ga n
+  // perpendicular to w1 and w2 are proportional to (be, s ga) in (e1, e2)
+  // and (al, -s ga) in (f1, f2). The outer angle turns z onto Q about w1,
+  // the inner one a onto z about w2:
+  //   t1 = angle(Q; e) - atan2(s ga, be),  t2 = atan2(-s ga, al) - angle(a; f).
+  // Three atan2 per pose for both solutions (atan2_axis is odd in y, so the
+  // second solution's are negations).
+  const double q_angle = atan2_axis(Q.dot(e2_), Q.dot(e1_));
+  const double outer_offset = atan2_axis(ga, be), inner_angle = atan2_axis(ga, al);
+  add(q_angle - outer_offset, -inner_angle - a_angle_w2_);
+  if (ga != 0.0) add(q_angle + outer_offset, inner_angle - a_angle_w2_);  // else a double root
   return out;
 }
 

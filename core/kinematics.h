@@ -131,6 +131,9 @@ class Kinematics {
   double s1_ = 1, s2_ = 1;  // t = s q
   Eigen::Vector3d w1_ = Eigen::Vector3d::UnitZ(), w2_ = Eigen::Vector3d::UnitX();
   Eigen::Vector3d a_ = Eigen::Vector3d::UnitZ();  // tool axis, spindle frame
+  Eigen::Vector3d e1_ = Eigen::Vector3d::UnitX(), e2_ = Eigen::Vector3d::UnitY();  // frame about w1
+  Eigen::Vector3d f1_ = Eigen::Vector3d::UnitZ(), f2_ = Eigen::Vector3d::UnitY();  // frame about w2
+  double a_angle_w2_ = 0.0;  // angle of a about w2 in (f1, f2)
   std::array<int, 3> linear_{};
 };
 
