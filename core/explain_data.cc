@@ -2,6 +2,8 @@
 // machine explain assumes without --machine.
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <memory>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -26,10 +28,35 @@ Data build_data(const Machine& m, const Recordings& rec, const ExplainOptions& o
   }
   const std::size_t rows = rec.size();
   d.runs = rec.has_run() ? std::max<int>(1, static_cast<int>(rec.run_names.size())) : 1;
-  GainEvaluator gains(m, Formulation::kIndependent);
-  d.names = gains.names();
-  std::optional<ErrorModel> model;
-  if (opt.baseline) model.emplace(m, *opt.baseline);
+  // The tool of each row (recordings.md: the tool_mm column, else the
+  // "# tool_mm:" metadata, else the machine's): the tool tip, and with it
+  // the Abbe levers of the angular errors, moves with the tool. One gain
+  // evaluator and baseline model per tool length; the errors stay as
+  // measured (the measurement tool is the machine file's).
+  double default_tool_mm = m.tool_length_mm;
+  if (const auto it = rec.metadata.find("tool_mm"); it != rec.metadata.end()) {
+    char* end = nullptr;
+    const double v = std::strtod(it->second.c_str(), &end);
+    if (end != it->second.c_str() && std::isfinite(v) && v >= 0) default_tool_mm = v;
+  }
+  struct ToolModels {
+    GainEvaluator gains;
+    std::optional<ErrorModel> model;
+  };
+  std::map<double, std::unique_ptr<ToolModels>> by_tool;
+  auto models_for = [&](double tool_mm) -> ToolModels& {
+    auto it = by_tool.find(tool_mm);
+    if (it == by_tool.end()) {
+      Machine mt = m;
+      if (std::isnan(mt.measurement_tool_length_mm)) mt.measurement_tool_length_mm = m.tool_length_mm;
+      mt.tool_length_mm = tool_mm;
+      auto tm = std::make_unique<ToolModels>(ToolModels{GainEvaluator(mt, Formulation::kIndependent), std::nullopt});
+      if (opt.baseline) tm->model.emplace(mt, *opt.baseline);
+      it = by_tool.emplace(tool_mm, std::move(tm)).first;
+    }
+    return *it->second;
+  };
+  d.names = models_for(default_tool_mm).gains.names();
 
   std::vector<Eigen::Vector3d> pw, pb;
   std::vector<double> y, w;
@@ -47,6 +74,10 @@ Data build_data(const Machine& m, const Recordings& rec, const ExplainOptions& o
     const double weight = rec.weight.empty() ? 1.0 : rec.weight[i];
     if (!(weight >= 0) || !std::isfinite(weight))
       throw InputError(rec.file, rec.line[i], "weight must be a finite number >= 0");
+    const double tool_mm = i < rec.tool_mm.size() && std::isfinite(rec.tool_mm[i]) ? rec.tool_mm[i] : default_tool_mm;
+    ToolModels& tm = models_for(tool_mm);
+    GainEvaluator& gains = tm.gains;
+    std::optional<ErrorModel>& model = tm.model;
     bool gains_ready = false;
     Eigen::Vector3d pred_w_um = Eigen::Vector3d::Zero();
     bool pred_ready = false;

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -28,6 +29,7 @@
 #include "core/recordings.h"
 #include "core/simulate.h"
 #include "tests/support/plans.h"
+#include "tests/support/samples.h"
 #include "tests/support/browser.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/test_paths.h"
@@ -584,40 +586,61 @@ TEST(ExplainReport, SelfContainedHtmlLoadsInChromiumWithoutConsoleErrors) {
 namespace volmap {
 namespace {
 
-// A recording made with another tool than the machine file's: the fits
-// predict with the machine's tool, so explain and identify refuse it with
-// the file and line, instead of fitting Abbe errors wrongly. A recording
-// with no rows says so.
-TEST(ExplainCli, ToolOtherThanTheMachinesAndEmptyRecordingsAreRefused) {
-  const std::string src = test::source_path("samples/recordings/null.csv");
-  std::ifstream in(src);
-  std::string text, line;
-  int n = 0, header_line = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    if (!line.empty() && line[0] != '#' && header_line == 0) {
-      header_line = n;
-      text += line + ",tool_mm\n";
-      continue;
-    }
-    text += line + (header_line && n > header_line ? (n == header_line + 3 ? ",300\n" : ",100\n") : "\n");
-  }
-  const std::string path = ::testing::TempDir() + "explain_test_tool.csv";
-  std::ofstream(path) << text;
-  const std::string m = test::source_path(kM3);
-  for (const std::string& cmd : {"explain --recordings " + path + " --machine " + m,
-                                 "identify --recordings " + path + " --machine " + m + " -o " + path + ".out.csv"}) {
-    const test::CliResult r = test::run_volmap(cmd);
-    EXPECT_EQ(r.status, 1) << cmd;
-    EXPECT_NE(r.err.find(path + ":" + std::to_string(header_line + 3) + ":"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("tool length 300"), std::string::npos) << r.err;
-    EXPECT_FALSE(std::filesystem::exists(path + ".out.csv"));
-  }
+// The tool of each row (recordings.md tool_mm) sets the tool tip and with
+// it the Abbe levers: a laser run made with a 300 mm tool on the Hsu sample
+// (errors measured with its 100 mm tool), computed here from the exact
+// model, is the fixed baseline to a few nm when the recording says
+// tool_mm = 300, and misses by the tool's lever without the column.
+// identify, which fits with the machine's tool, refuses such a recording
+// with the file and line; a recording with no rows says so.
+TEST(ExplainCli, ToolOfEachRowSetsTheLevers) {
+  Machine m300 = test::sample_machine("hsu-3axis");
+  m300.measurement_tool_length_mm = m300.tool_length_mm;  // the errors' tool
+  m300.tool_length_mm = 300.0;
+  const ErrorModel model(m300, load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv")));
+  std::string with_tool = "# volmap recordings v1\nrun,x_mm,y_mm,z_mm,dir_x,ex_um,tool_mm\n";
+  std::string without = "# volmap recordings v1\nrun,x_mm,y_mm,z_mm,dir_x,ex_um\n";
+  for (int run = 1; run <= 2; ++run)
+    for (int dir : {+1, -1})
+      for (int k = 0; k <= 20; ++k) {
+        const double x = dir > 0 ? 25.0 * k : 500.0 - 25.0 * k;
+        AxisVector u(3);
+        u << x, 200, 150;
+        const double ex = model.exact(u, {static_cast<std::int8_t>(dir), 0, 0, 0, 0, 0}).dP_mm.x() * 1e3;
+        const std::string row = fmt::format("{},{},200,150,{},{:.4f}", run, x, dir, ex);
+        with_tool += row + ",300\n";
+        without += row + "\n";
+      }
+  const std::string a = ::testing::TempDir() + "explain_test_tool300.csv";
+  const std::string b = ::testing::TempDir() + "explain_test_tool_default.csv";
+  std::ofstream(a) << with_tool;
+  std::ofstream(b) << without;
+  auto baseline_rms = [&](const std::string& rec, json* doc) {
+    const test::CliResult r = test::run_volmap("explain --recordings " + rec + " --machine " + test::source_path(kM3) +
+                                               " --baseline " + test::source_path("samples/errors/hsu-3axis.csv") +
+                                               " --json -");
+    EXPECT_EQ(r.status, 0) << r.err;
+    *doc = json::parse(r.out);
+    return (*doc)["baseline"]["rms_um"].get<double>();
+  };
+  json da, db;
+  const double rms_tool = baseline_rms(a, &da), rms_default = baseline_rms(b, &db);
+  EXPECT_LT(rms_tool, 0.01) << da.dump(1);
+  EXPECT_TRUE(da["findings"].empty()) << da.dump(1);
+  EXPECT_GT(rms_default, 0.3) << db.dump(1);
+
+  const test::CliResult r = test::run_volmap("identify --recordings " + a + " --machine " + test::source_path(kM3) +
+                                             " -o " + a + ".out.csv");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find(a + ":3:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("tool length 300"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(a + ".out.csv"));
+
   const std::string empty = ::testing::TempDir() + "explain_test_empty.csv";
   std::ofstream(empty) << "# volmap recordings v1\nrun,t_s,x_mm,ex_um\n";
-  const test::CliResult r = test::run_volmap("explain --recordings " + empty);
-  EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("no observations"), std::string::npos) << r.err;
+  const test::CliResult e = test::run_volmap("explain --recordings " + empty);
+  EXPECT_EQ(e.status, 1);
+  EXPECT_NE(e.err.find("no observations"), std::string::npos) << e.err;
 }
 
 }  // namespace

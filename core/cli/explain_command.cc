@@ -53,7 +53,6 @@ Runner register_explain(CLI::App& app) {
     if (rec.size() == 0)
       throw InputError(o->recordings, 0, "no observations (a header and no rows); record some, or check the file");
     const Machine m = o->machine.empty() ? cartesian_machine_for(rec) : load_machine_json(o->machine);
-    if (!o->machine.empty()) require_machine_tool_length(rec, m.tool_length_mm, m.name);
     ExplainOptions opt;
     opt.degree = o->degree;
     opt.machine_assumed = o->machine.empty();
