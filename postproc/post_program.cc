@@ -129,6 +129,9 @@ class ProgramPost {
   std::string line_ending_;
 };
 
+// Pieces of one move at most (an arc's initial pieces, and all pieces).
+constexpr int kMaxArcPieces = 1 << 16;
+
 std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                         const Vector3d& start_cmd) {
   const double tol = options_.tolerance_mm;
@@ -138,7 +141,13 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
     const nc::ArcGeometry g = nc::arc_geometry(m);
     const double r = std::max(g.radius, g.end_radius);
     const double max_step = r > tol / 4 ? 2.0 * std::acos(1.0 - (tol / 4) / r) : M_PI / 2;
-    n0 = std::max(4, static_cast<int>(std::ceil(std::abs(g.sweep) / max_step)));
+    const double pieces = std::ceil(std::abs(g.sweep) / max_step);
+    if (!(pieces <= kMaxArcPieces))  // also NaN: never cast to int out of range
+      throw InputError(file_, current_line_,
+                       fmt::format("the arc needs more than {} pieces to keep {:g} um (radius {:g} mm); "
+                                   "raise --tolerance-um or check the arc's centre",
+                                   kMaxArcPieces, tol * 1e3, r));
+    n0 = std::max(4, static_cast<int>(pieces));
   }
   std::vector<Piece> done;
   struct Pending {
@@ -149,7 +158,7 @@ std::vector<Piece> ProgramPost::segment(const Corrector& c, const nc::Motion& m,
   std::vector<Pending> stack;
   Vector3d c_prev = start_cmd;
   double s_prev = 0.0;
-  constexpr int kMaxPieces = 1 << 16;
+  constexpr int kMaxPieces = kMaxArcPieces;
   for (int k = 1; k <= n0; ++k) {
     stack.push_back({s_prev, static_cast<double>(k) / n0, c_prev, last_dir_});
     while (!stack.empty()) {

@@ -1,21 +1,11 @@
-// libFuzzer target: the recordings CSV reader (core/recordings.h), and the
-// writer on what it read. The only acceptable failure is InputError.
+// libFuzzer target: volmap::fuzz::recordings_csv (tests/fuzz/harness.h).
 #include <cstddef>
 #include <cstdint>
-#include <sstream>
-#include <string>
+#include <string_view>
 
-#include "core/input_error.h"
-#include "core/recordings.h"
+#include "tests/fuzz/harness.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
-  try {
-    const volmap::Recordings r = volmap::read_recordings_csv(in, "fuzz.csv");
-    r.check_consistent();
-    std::ostringstream out;
-    volmap::write_recordings_csv(out, r);
-  } catch (const volmap::InputError&) {
-  }
+  volmap::fuzz::recordings_csv(std::string_view(reinterpret_cast<const char*>(data), size));
   return 0;
 }
