@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <ostream>
+#include <stdexcept>
 #include <vector>
 
 #include <fmt/format.h>
@@ -428,13 +429,22 @@ void ProgramPost::line(const std::string& raw, int number, bool newline) {
 PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
                         const Machine& machine, const ErrorSet& errors,
                         const nc::ProgramSetup& setup, const PostOptions& options) {
-  if (!(options.tolerance_mm > 0)) throw std::invalid_argument("--tolerance-um must be positive");
+  if (!(options.tolerance_mm > 0) || !std::isfinite(options.tolerance_mm))
+    throw std::invalid_argument("--tolerance-um must be a positive finite number");
   ProgramPost post(in_name, out, machine, errors, setup, options);
   std::string text;
   int number = 0;
   while (std::getline(in, text)) {
     ++number;
-    post.line(text, number, !in.eof());
+    try {
+      post.line(text, number, !in.eof());
+    } catch (const std::out_of_range& e) {
+      // An error table's range (the message names the table's file:line):
+      // the block that left it is the program's line (docs/model.md).
+      throw InputError(in_name, number,
+                       std::string("this block leaves the error tables: ") + e.what() +
+                           " (volmap post --clamp holds the end values)");
+    }
   }
   return post.report();
 }

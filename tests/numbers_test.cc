@@ -71,6 +71,8 @@ TEST(Numbers, NonFiniteOptionsAreRefused) {
     EXPECT_FALSE(has_non_finite(r.out)) << a << "\n" << r.out;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << a << "\n" << r.err;
     EXPECT_TRUE(fs::is_empty(d)) << a << " wrote something";
+    fs::remove_all(d);
+    fs::create_directories(d);
   }
   fs::remove_all(d);
 }
@@ -89,6 +91,8 @@ TEST(Numbers, NonPositiveTolerancesAndSpacingsAreRefused) {
     const CliResult r = run_volmap_in_source(a);
     EXPECT_NE(r.status, 0) << a;
     EXPECT_TRUE(fs::is_empty(d)) << a << " wrote something";
+    fs::remove_all(d);
+    fs::create_directories(d);
   }
   fs::remove_all(d);
 }
@@ -159,7 +163,7 @@ TEST(Numbers, OutsideTheTableIsAnErrorByDefaultAndHeldWithClamp) {
   const fs::path d = fresh_dir("numbers_outside");
   const std::string errors = short_table(d);
   const fs::path prog = d / "p.ngc";
-  std::ofstream(prog) << "G21 G90\nG0 X0 Y0 Z0\nG1 X100 F100\nG1 X250\nM2\n";
+  std::ofstream(prog) << "G21 G90\nG0 X10 Y10 Z10\nG1 X100 F100\nG1 X250\nM2\n";
   const std::string base = "post --machine samples/machines/hsu-3axis.json --errors " + errors +
                            " --work-offset 0,0,0 " + prog.string() + " -o " + (d / "out.ngc").string();
   const CliResult refused = run_volmap_in_source(base);

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "core/cli/commands.h"
+#include "core/cli/option_checks.h"
 #include "core/errors_import.h"
 #include "core/machine_json.h"
 #include "maps/map_report.h"
@@ -93,6 +94,7 @@ Runner register_map(CLI::App& app) {
   sub->add_option("--tolerance-um", o->tolerance_um,
                   "Automatic spacing: the coarsest grid whose interpolation error against the "
                   "model stays below this (um; three-axis machines; default 1 without --spacing)")
+      ->check(kFinitePositive)
       ->excludes(spacing);
   sub->add_option("--interpolation", o->interpolation,
                   "Interpolation the tolerance is checked with: linear (default, as controllers "
@@ -111,10 +113,10 @@ Runner register_map(CLI::App& app) {
   sub->add_option("--repeatability-um", o->repeatability_um,
                   "Standard uncertainty of every translational error of the errors file, um (default: "
                   "its '# repeatability_um:' metadata); adds the per-node uncertainty u")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kFiniteNonNegative);
   sub->add_option("--repeatability-urad", o->repeatability_urad,
                   "Standard uncertainty of every angular error, urad (default: '# repeatability_urad:')")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kFiniteNonNegative);
   sub->footer(
       "Example:\n  volmap map --machine samples/machines/hsu-3axis.json "
       "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt\n"
