@@ -26,8 +26,8 @@ inline CliResult run_volmap_in_source(const std::string& args) {
   static int calls = 0;
   const std::string err_file = ::testing::TempDir() + "volmap_src_err_" + std::to_string(getpid()) +
                                "_" + std::to_string(++calls) + ".txt";
-  const std::string cmd = "cd '" + source_path("") + "' && '" + volmap_binary() + "' " + args +
-                          " </dev/null 2>'" + err_file + "'";
+  const std::string cmd = "cd '" + source_path("") + "' && '" + volmap_binary() + "' </dev/null " + args +
+                          " 2>'" + err_file + "'";
   CliResult r;
   FILE* p = popen(cmd.c_str(), "r");
   std::array<char, 4096> buf;
