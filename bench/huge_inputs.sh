@@ -47,10 +47,6 @@ gen() {
     print "G0 Z5"; print "M2"; print "%"
   }'
 }
-post() {
-  gen | "$volmap" post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \
-        --work-offset 250,200,100 - -o - | wc -c >"$work/out_bytes"
-}
 gen | wc -lc | awk '{printf "generated program: %d lines, %.0f MB\n", $1, $2/1048576}'
 measure "generate only (awk | wc)" bash -c "$(declare -f gen); mb=$mb; gen | wc -c >/dev/null"
 /usr/bin/time -f "%e %M" -o "$work/time_post" \
@@ -64,12 +60,12 @@ printf 'post output: %.0f MB\n' "$(echo "$(cat "$work/out_bytes")/1048576" | bc 
 awk -F, 'BEGIN{OFS=","} /^[A-Z],dir,/{d=1; $2=""; sub(",,", ","); print; next}
          /^$/ {d=0} d && $2=="-1" {next} d {$2=""; sub(",,", ","); print; next} {print}' \
   samples/errors/hsu-3axis.csv >"$work/one-layer.csv"
-measure "map --spacing $spacing (build + save)" "$volmap" map --machine samples/machines/hsu-3axis.json \
-  --errors "$work/one-layer.csv" --spacing "$spacing" -o "$work/t.vmt" --json >"$work/map.json"
+measure "map --spacing $spacing (build + save)" bash -c '"$0" map --machine samples/machines/hsu-3axis.json \
+  --errors "$1/one-layer.csv" --spacing "$2" -o "$1/t.vmt" --json >"$1/map.json"' "$volmap" "$work" "$spacing"
 python3 - "$work/map.json" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
-print(f"table: {d['nodes']} nodes x {d['layers']} layer(s), {d['bytes']/2**20:.0f} MB, build {d['build_seconds']:.1f} s, {d['threads']} threads")
+print(f"table: {d['nodes']} nodes x {len(d['layers'])} layer(s), {d['bytes']/2**20:.0f} MB, build {d['build_seconds']:.1f} s, {d['threads']} threads")
 PY
-measure "export --format csv (load + write)" "$volmap" export --table "$work/t.vmt" --format csv -o "$work/csv"
+measure "export --format csv (load + write)" bash -c '"$0" export --table "$1/t.vmt" --format csv -o "$1/csv" >/dev/null' "$volmap" "$work"
 du -sh "$work/t.vmt" "$work/csv" | awk '{print "size: " $2 " " $1}'
