@@ -1,7 +1,8 @@
 // The bad-input catalogue (issue 8; shared/spec/cli.md conventions): one
 // file per rule of the specs (errors.md, recordings.md,
-// docs/machine-format.md, the NC reader of docs/post.md, tool tables and
-// parameter files) and per unsupported NC construct, each run through the
+// docs/machine-format.md, the NC reader of docs/post.md, simulation plans,
+// tool tables and parameter files) and per unsupported NC construct, each
+// run through the
 // CLI. For every file: exit status 1, one line on stderr that is the golden
 // message tests/bad/<kind>/<name>.expected (UPDATE_GOLDEN=1 regenerates) and
 // names the file and the line (or JSON path), nothing written (the output
@@ -48,6 +49,9 @@ const std::vector<Kind>& kinds() {
        "map --machine samples/machines/hsu-3axis.json --errors {IN} --spacing 100,100,100 -o {OUT}"},
       {"recordings", {"tests/data/recordings/bad", "tests/bad/recordings"}, ".csv",
        "identify --machine samples/machines/hsu-3axis.json --recordings {IN} -o {OUT}"},
+      {"plan", {"tests/bad/plan"}, ".json",
+       "simulate --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv "
+       "--plan {IN} -o {OUT}"},
       {"tooltable", {"tests/bad/tooltable"}, ".tbl", nullptr},
       {"varfile", {"tests/bad/varfile"}, ".var", nullptr},
   };
@@ -150,6 +154,52 @@ TEST(BadInputCatalogue, EveryGoldenHasAnInput) {
           << e.path() << " has no input";
     }
   EXPECT_GE(inputs.size(), 100u);
+}
+
+// "-" reads standard input: a bad program there is named <stdin>, with its
+// line, and nothing reaches standard output or the output file.
+TEST(BadInputCatalogue, StandardInputIsNamedInMessages) {
+  const fs::path d = fresh_dir("bad_stdin");
+  const std::string post =
+      "post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv "
+      "--work-offset 250,200,100 - ";
+  const CliResult to_file = run_volmap_in_source(post + "-o " + (d / "out.ngc").string() +
+                                                 " < tests/bad/nc/cutter_comp_g41.ngc");
+  EXPECT_EQ(to_file.status, 1);
+  EXPECT_EQ(to_file.err.rfind("volmap: <stdin>:4:1: G41 is not supported", 0), 0u) << to_file.err;
+  EXPECT_TRUE(fs::is_empty(d));
+  const CliResult to_stdout = run_volmap_in_source(post + "-o - < tests/bad/nc/o_word_sub.ngc");
+  EXPECT_EQ(to_stdout.status, 1);
+  EXPECT_EQ(to_stdout.err.rfind("volmap: <stdin>:4:1: O-word", 0), 0u) << to_stdout.err;
+  const CliResult errors = run_volmap_in_source(
+      "map --machine samples/machines/hsu-3axis.json --errors - --spacing 100,100,100 -o " +
+      (d / "t.vmt").string() + " < tests/data/errors/bad/nan_cell.csv");
+  EXPECT_EQ(errors.status, 1);
+  EXPECT_NE(errors.err.find(":3:"), std::string::npos) << errors.err;
+  EXPECT_TRUE(fs::is_empty(d));
+  fs::remove_all(d);
+}
+
+// An input that does not exist: exit 1, one line naming it, nothing written.
+TEST(BadInputCatalogue, MissingInputsAreNamed) {
+  const fs::path d = fresh_dir("bad_missing");
+  const std::string out = (d / "out").string();
+  for (const std::string& a :
+       {"post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv "
+        "--work-offset 250,200,100 nonexistent.ngc -o " + out,
+        "post --machine nonexistent.json --errors samples/errors/hsu-3axis.csv samples/programs/pocket.ngc -o " + out,
+        "post --machine samples/machines/hsu-3axis.json --errors nonexistent.csv samples/programs/pocket.ngc -o " + out,
+        "post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv "
+        "--tool-table nonexistent.tbl samples/programs/pocket.ngc -o " + out,
+        "identify --machine samples/machines/hsu-3axis.json --recordings nonexistent.csv -o " + out,
+        "export --table nonexistent.vmt --format csv -o " + out}) {
+    const CliResult r = run_volmap_in_source(a);
+    EXPECT_EQ(r.status, 1) << a;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("nonexistent"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::is_empty(d)) << a;
+  }
+  fs::remove_all(d);
 }
 
 // -o onto an input is refused (same path, another spelling of it, a
