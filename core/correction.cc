@@ -75,6 +75,14 @@ class InverseJacobian {
 
 }  // namespace
 
+bool correction_step(const Kinematics& kin, const PoseJacobian& J_v_u, const Eigen::Vector3d& dP_mm,
+                     const Eigen::Vector3d& dQ, double singular_sin, AxisVector& du) {
+  const InverseJacobian Jinv(kin, J_v_u, singular_sin);
+  du = AxisVector::Zero(kin.machine().axis_count());
+  Jinv.solve(-dP_mm, -dQ, du);
+  return Jinv.singular();
+}
+
 CorrectionSolver::CorrectionSolver(const ErrorModel& model, CorrectionOptions options)
     : model_(model), options_(options), kin_(model.machine()) {
   if (const std::string why = options_.invalid_reason(); !why.empty())

@@ -76,6 +76,15 @@ struct CorrectionResult {
   double residual_axis = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// One correction step for a pose error dv = (dP_mm, dQ) from any source
+/// (an error model, a table): du with J_v_u du = -dv, solved block-wise as
+/// CorrectionSolver does (rotary axes by least squares on the orientation
+/// rows, the outer one suppressed at the singular position, then the linear
+/// axes exactly). du is resized and overwritten. Returns whether the pose is
+/// singular (|Q x w_outer| <= singular_sin).
+bool correction_step(const Kinematics& kin, const PoseJacobian& J_v_u, const Eigen::Vector3d& dP_mm,
+                     const Eigen::Vector3d& dQ, double singular_sin, AxisVector& du);
+
 /// Computes corrections against one error model. Keeps a reference to
 /// `model`, which must outlive it. Immutable; correct() is thread-safe as
 /// far as ErrorModel::actual is.

@@ -236,12 +236,24 @@ Kinematics::Rotary Kinematics::rotary_solutions(const ToolPose& v_w, const AxisV
   const double al = (w1_.dot(Q) - g * w2_.dot(a_)) / den;
   const double be = (w2_.dot(a_) - g * w1_.dot(Q)) / den;
   const Eigen::Vector3d n = w1_.cross(w2_);
-  const double ga2 = (1.0 - al * al - be * be - 2.0 * al * be * g) / n.squaredNorm();
+  // |z| = 1 would give ga^2 |n|^2 = 1 - al^2 - be^2 - 2 al be g, which
+  // cancels catastrophically near the singular position (al -> 1 keeps no
+  // trace of a tilt below ~1e-8). Rotation about w1 keeps the length of the
+  // part perpendicular to w1, so |z_perp|^2 = |w1 x Q|^2 = rho^2, and with
+  // z_perp = be (w2 - g w1) + ga n (two orthogonal parts, |w2 - g w1|^2 =
+  // |n|^2 = 1 - g^2):  ga^2 = (rho^2 - be^2 |n|^2) / |n|^2, from the tilt
+  // itself. z_perp, not z - w1 (w1.z), goes into the outer angle for the
+  // same reason.
+  const double rho2 = w1_.cross(Q).squaredNorm();
+  const double n2 = n.squaredNorm();
+  const double ga2 = (rho2 - be * be * n2) / n2;
   if (ga2 < -1e-12) return out;  // the orientation is out of reach
   const double ga = std::sqrt(std::max(0.0, ga2));
+  const Eigen::Vector3d w2_perp = w2_ - g * w1_;
   for (double sign : {+1.0, -1.0}) {
     const Eigen::Vector3d z = al * w1_ + be * w2_ + sign * ga * n;
-    add(subproblem1(w1_, z, Q), subproblem1(w2_, a_, z));
+    const Eigen::Vector3d z_perp = be * w2_perp + sign * ga * n;
+    add(subproblem1(w1_, z_perp, Q), subproblem1(w2_, a_, z));
     if (ga == 0.0) break;  // a double root
   }
   return out;

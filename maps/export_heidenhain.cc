@@ -75,11 +75,11 @@ std::string location_line(const std::string& name, double value) {
 }  // namespace
 
 std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions& o) {
-  const bool nonlinear = t.channel("ux").has_value();
+  const bool nonlinear = t.three_axis_correction();
   if (!nonlinear && o.errors == nullptr)
     throw ExportError(fmt::format(
-        "--format heidenhain: a {}-axis table has no axis corrections for nonlinear axis error "
-        "compensation; give --errors E.csv for the KinematicsComp component-error tables",
+        "--format heidenhain: nonlinear axis error compensation takes three-axis tables only (this "
+        "one has {} axes); give --errors E.csv for the KinematicsComp component-error tables",
         t.axis_count()));
   std::vector<ExportFile> files;
   std::string notes = fmt::format(

@@ -14,11 +14,15 @@ std::string position_column(AxisName a) {
   const char c = static_cast<char>(axis_char(a) - 'A' + 'a');
   return fmt::format("{}_{}", c, is_rotary(a) ? "deg" : "mm");
 }
-double display(AxisName a, double v) { return is_rotary(a) ? v * 180.0 / M_PI : v; }
+// Degrees rounded to 1e-9 deg (the rad round trip of 30 deg gives
+// 29.999999999999996).
+double display(AxisName a, double v) {
+  return is_rotary(a) ? std::round(v * 180.0 / M_PI * 1e9) / 1e9 + 0.0 : v;
+}
 
 // Channel names with display units: lengths in um, angles / unit vectors in urad.
 std::string value_column(const std::string& channel) {
-  return channel + (channel[1] == 'i' || channel[1] == 'j' || channel[1] == 'k' ? "_urad" : "_um");
+  return channel + (is_angular_channel(channel) ? "_urad" : "_um");
 }
 
 std::string layer_tag(const VolumetricTable& t, int layer) {
@@ -55,11 +59,7 @@ std::vector<ExportFile> csv(const VolumetricTable& t, const ExportOptions&) {
       }
       const double* v = t.at(layer, n);
       for (int c = 0; c < t.channel_count(); ++c) {
-        f.text += fixed(v[c] * 1e3 * (t.channels[static_cast<size_t>(c)][1] >= 'i' &&
-                                              t.channels[static_cast<size_t>(c)][1] <= 'k'
-                                          ? 1e3
-                                          : 1.0),
-                        6);
+        f.text += fixed(v[c] * (is_angular_channel(t.channels[static_cast<size_t>(c)]) ? 1e6 : 1e3), 6);
         f.text += c + 1 < t.channel_count() ? ',' : '\n';
       }
     }
@@ -97,7 +97,7 @@ std::vector<ExportFile> json(const VolumetricTable& t, const ExportOptions&) {
     l["directions"] = dirs;
     for (int c = 0; c < t.channel_count(); ++c) {
       const std::string& name = t.channels[static_cast<size_t>(c)];
-      const double k = name[1] >= 'i' && name[1] <= 'k' ? 1e6 : 1e3;
+      const double k = is_angular_channel(name) ? 1e6 : 1e3;
       nlohmann::ordered_json values = nlohmann::ordered_json::array();
       for (std::int64_t n = 0; n < t.node_count(); ++n) {
         // Round to 1e-6 um (1 fm): the file is for people and tools, the

@@ -125,10 +125,15 @@ void require_uniform(const VolumetricTable& t, int axis, const std::string& form
 }
 
 void require_three_axis(const VolumetricTable& t, const std::string& format) {
-  if (!t.channel("ux"))
+  if (!t.three_axis_correction()) {
+    std::string axes;
+    for (const GridAxis& g : t.grid) axes += axis_char(g.axis);
     throw ExportError(fmt::format(
-        "--format {}: needs a three-axis table with the correction du (this table has {} axes)",
-        format, t.axis_count()));
+        "--format {}: the controller takes three-axis tables (linear X, Y, Z with the correction "
+        "du) only, this table has {} axes ({}); export it as csv or json{}",
+        format, t.axis_count(), axes,
+        format == "heidenhain" ? ", or give --errors for the KinematicsComp tables" : ""));
+  }
 }
 
 }  // namespace exporters

@@ -84,13 +84,17 @@ std::string map_report_html(const VolumetricTable& t, const ReportInfo& info, in
   panels.push_back({"ey (um)", {1}, 1e3, false});
   panels.push_back({"ez (um)", {2}, 1e3, false});
   panels.push_back({"|e| (um)", {0, 1, 2}, 1e3, true});
+  if (const std::optional<int> ei = t.channel("ei"))
+    panels.push_back({"|tool-axis error| (urad)", {*ei, *ei + 1, *ei + 2}, 1e6, true});
   if (const std::optional<int> ux = t.channel("ux")) {
     panels.push_back({"ux (um)", {*ux}, 1e3, false});
     panels.push_back({"uy (um)", {*ux + 1}, 1e3, false});
     panels.push_back({"uz (um)", {*ux + 2}, 1e3, false});
-  } else if (const std::optional<int> ei = t.channel("ei")) {
-    panels.push_back({"|tool-axis error| (urad)", {*ei, *ei + 1, *ei + 2}, 1e6, true});
   }
+  // Five-axis: the rotary axes' corrections (urad).
+  for (const char* name : {"ua", "ub", "uc"})
+    if (const std::optional<int> c = t.channel(name))
+      panels.push_back({std::string(name) + " (urad)", {*c}, 1e6, false});
   if (const std::optional<int> u = t.channel("u")) panels.push_back({"u, standard uncertainty (um)", {*u}, 1e3, true});
 
   auto node_of = [&](const std::vector<std::int64_t>& idx) {

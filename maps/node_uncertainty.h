@@ -15,6 +15,10 @@
 
 #include <optional>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "core/error_model.h"
 #include "maps/volumetric_table.h"
@@ -25,6 +29,25 @@ struct Repeatability {
   double translational_mm = 0.0;  ///< standard uncertainty of EXX, EX0C, ... (mm)
   double angular_rad = 0.0;       ///< standard uncertainty of EAX, EC0X, ... (rad)
 };
+
+/// Covariance of identified location errors (volmap identify --json,
+/// docs/identify.md): Sigma_ij = rho_ij sigma_i sigma_j over the estimated
+/// parameters, internal units (mm, rad) squared, indexed by the error gains
+/// of GainEvaluator (names()).
+struct ParameterCovariance {
+  std::vector<std::string> names;  ///< canonical error names ("EY0A")
+  std::vector<int> gain_index;     ///< into GainEvaluator::names()
+  Eigen::MatrixXd covariance;      ///< (mm|rad)^2
+};
+
+/// From an identify report ("volmap-identify/1": parameters[].std_error,
+/// correlation{names, matrix}). Location errors only: a component-curve
+/// parameter ("EXX.p2") is refused (its gain needs the curve's basis, not
+/// propagated yet); setup offsets belong to the recording, not the
+/// machine, and are left out. Throws std::invalid_argument naming the file
+/// and JSON path.
+ParameterCovariance covariance_from_identify(const nlohmann::json& report, const Machine& m,
+                                             Formulation f, const std::string& file);
 
 /// From the errors file's metadata "# repeatability_um: R" and
 /// "# repeatability_urad: R" (standard uncertainties, 1 sigma; a missing
@@ -38,7 +61,10 @@ void add_uncertainty_channel(VolumetricTable& table);
 
 /// Fills channel "u" of every node and layer (threads: 0 = all cores).
 /// The same bytes for any thread count.
+/// With `covariance` (may be null) too: u^2 = sum_k sigma_k^2 |g_k|^2 over
+/// the errors the covariance does not name (repeatability) + sum_ij
+/// Sigma_ij g_i . g_j over those it names (trace of G Sigma G^T).
 void fill_uncertainty(const ErrorModel& model, VolumetricTable& table, const Repeatability& r,
-                      int threads = 0);
+                      int threads = 0, const ParameterCovariance* covariance = nullptr);
 
 }  // namespace volmap::maps

@@ -101,7 +101,7 @@ class Reader {
 void write_table(std::ostream& out, const VolumetricTable& t) {
   Writer w(out);
   w.bytes(kTableMagic, sizeof kTableMagic);
-  w.uint(kTableVersion);
+  w.uint(t.pose_correction() ? kTableVersionPoseCorrection : kTableVersion);
   w.uint(static_cast<std::uint32_t>(t.axis_count()));
   w.uint(static_cast<std::uint32_t>(t.channel_count()));
   w.uint(static_cast<std::uint32_t>(t.bidirectional_axes.size()));
@@ -147,13 +147,16 @@ VolumetricTable read_table(std::istream& in, const std::string& file) {
   Reader r(in, file);
   char magic[8];
   r.bytes(magic, sizeof magic, "the magic number");
+  if (magic[0] == '{')
+    r.fail("a factorized table (JSON, volmap map --form factorized) has no grid; exports take "
+           "the full grid: build it with volmap map --form full");
   if (std::memcmp(magic, kTableMagic, sizeof magic) != 0)
     r.fail("not a volmap table (no VOLMAPTB magic); give a file written by volmap map");
   const std::uint32_t version = r.uint<std::uint32_t>("the version");
-  if (version != kTableVersion)
-    r.fail(fmt::format("table format version {} is not supported (this volmap reads version {}); "
-                       "build the table again with this volmap",
-                       version, kTableVersion));
+  if (version != kTableVersion && version != kTableVersionPoseCorrection)
+    r.fail(fmt::format("table format version {} is not supported (this volmap reads versions {} "
+                       "and {}); build the table again with this volmap",
+                       version, kTableVersion, kTableVersionPoseCorrection));
   VolumetricTable t;
   const std::uint32_t axes = r.uint<std::uint32_t>("the axis count");
   const std::uint32_t channels = r.uint<std::uint32_t>("the channel count");
@@ -199,6 +202,10 @@ VolumetricTable read_table(std::istream& in, const std::string& file) {
   for (std::uint32_t c = 0; c < channels; ++c) t.channels.push_back(r.str("a channel name"));
   if (t.channels[0] != "ex" || t.channels[1] != "ey" || t.channels[2] != "ez")
     r.fail("the first channels are not ex, ey, ez; the file is damaged");
+  if ((version == kTableVersionPoseCorrection) != t.pose_correction())
+    r.fail(fmt::format("format version {} {} the per-axis correction channels of a machine with "
+                       "rotary axes; the file is damaged",
+                       version, version == kTableVersionPoseCorrection ? "without" : "with"));
   for (std::uint32_t j = 0; j < bidir; ++j) {
     const std::uint32_t a = r.uint<std::uint32_t>("a bidirectional axis");
     if (a >= axes || (j > 0 && static_cast<int>(a) <= t.bidirectional_axes.back()))

@@ -1,4 +1,5 @@
-// The binary table file, format "volmap table" version 1 (docs/maps.md):
+// The binary table file, format "volmap table" version 1, or 2 for
+// five-axis tables with the correction (docs/maps.md):
 // magic, header (machine, provenance, grid, channels, direction layers),
 // the values as little-endian IEEE-754 doubles in the table's storage
 // order, and an FNV-1a 64 checksum of every byte before it. Internal units
@@ -15,6 +16,12 @@ namespace volmap::maps {
 
 inline constexpr char kTableMagic[8] = {'V', 'O', 'L', 'M', 'A', 'P', 'T', 'B'};
 inline constexpr std::uint32_t kTableVersion = 1;
+/// Tables with the correction of every axis of a machine with rotary axes
+/// (five-axis: ex ey ez ei ej ek ux uy uz ua uc): the same layout, version 2,
+/// so that a volmap that reads version 1 only refuses them instead of
+/// taking "ux" for a three-axis correction. Readers take both; the version
+/// must agree with the channels.
+inline constexpr std::uint32_t kTableVersionPoseCorrection = 2;
 
 /// FNV-1a 64 (Fowler/Noll/Vo): offset basis 14695981039346656037, prime
 /// 1099511628211, one byte at a time. `hash` continues a running hash.

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/kinematics.h"
+
 namespace volmap::maps {
 
 const char* interpolation_name(Interpolation m) {
@@ -61,13 +63,97 @@ AxisVector VolumetricTable::node_position(std::int64_t node) const {
   return u;
 }
 
+bool VolumetricTable::three_axis_correction() const {
+  if (axis_count() != 3 || !channel("ux")) return false;
+  for (const GridAxis& g : grid)
+    if (is_rotary(g.axis)) return false;
+  return true;
+}
+
+bool VolumetricTable::pose_correction() const {
+  if (grid.empty() || three_axis_correction()) return false;
+  bool rotary = false;
+  for (const GridAxis& g : grid) {
+    rotary |= is_rotary(g.axis);
+    if (!channel(correction_channel_name(g.axis))) return false;
+  }
+  return rotary;
+}
+
+int VolumetricTable::correction_channel() const {
+  if (grid.empty()) return -1;
+  const std::optional<int> c = channel(correction_channel_name(grid.front().axis));
+  return c ? *c : -1;
+}
+
+std::string correction_channel_name(AxisName a) {
+  return std::string("u") + static_cast<char>(axis_char(a) - 'A' + 'a');
+}
+
+bool is_angular_channel(const std::string& name) {
+  if (name.size() != 2) return false;
+  if (name[0] == 'e') return name[1] == 'i' || name[1] == 'j' || name[1] == 'k';
+  if (name[0] == 'u') return name[1] == 'a' || name[1] == 'b' || name[1] == 'c';
+  return false;
+}
+
 std::vector<std::string> channels_for(const Machine& m) {
   if (m.axis_count() == 3 && !m.has_rotary_axes())
     return {"ex", "ey", "ez", "ux", "uy", "uz"};
-  return {"ex", "ey", "ez", "ei", "ej", "ek"};
+  std::vector<std::string> c = {"ex", "ey", "ez", "ei", "ej", "ek"};
+  bool invertible = true;
+  try {
+    const Kinematics kin(m);
+    invertible = kin.has_rotary_axes();
+  } catch (const std::invalid_argument&) {
+    invertible = false;
+  }
+  if (invertible)
+    for (AxisName a : m.axis_order) c.push_back(correction_channel_name(a));
+  return c;
 }
 
-VolumetricTable make_table_layout(const ErrorModel& model, const std::vector<double>& spacing) {
+namespace {
+
+std::vector<GridAxis> layout_grid(const Machine& m, const std::vector<double>& spacing) {
+  if (static_cast<int>(spacing.size()) != m.axis_count())
+    throw std::invalid_argument(fmt::format("expected {} spacings (one per axis), got {}",
+                                            m.axis_count(), spacing.size()));
+  std::vector<GridAxis> grid;
+  for (int i = 0; i < m.axis_count(); ++i) {
+    try {
+      grid.push_back(make_grid_axis(m, i, spacing[static_cast<size_t>(i)]));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(
+          fmt::format("axis {}: {}", axis_char(m.axis_order[static_cast<size_t>(i)]), e.what()));
+    }
+  }
+  return grid;
+}
+
+int bidirectional_count(const ErrorModel& model) {
+  int b = 0;
+  for (AxisName a : model.machine().axis_order) {
+    const AxisErrors* e = model.errors().errors_of(a);
+    b += e != nullptr && e->bidirectional();
+  }
+  return b;
+}
+
+}  // namespace
+
+std::size_t table_bytes(const ErrorModel& model, const std::vector<double>& spacing,
+                        int extra_channels) {
+  const std::vector<GridAxis> grid = layout_grid(model.machine(), spacing);
+  const double nodes = static_cast<double>(total_nodes(grid));
+  const double channels =
+      static_cast<double>(channels_for(model.machine()).size()) + extra_channels;
+  const double bytes = nodes * channels * static_cast<double>(1 << bidirectional_count(model)) * 8.0;
+  return bytes > 1e18 ? static_cast<std::size_t>(1e18) : static_cast<std::size_t>(bytes);
+}
+
+VolumetricTable make_table_layout(const ErrorModel& model, const std::vector<double>& spacing,
+                                  std::size_t max_bytes, int extra_channels) {
   const Machine& m = model.machine();
   if (static_cast<int>(spacing.size()) != m.axis_count())
     throw std::invalid_argument(fmt::format("expected {} spacings (one per axis), got {}",
@@ -76,23 +162,24 @@ VolumetricTable make_table_layout(const ErrorModel& model, const std::vector<dou
   t.machine_name = m.name;
   t.errors_source = model.errors().file;
   t.formulation = model.options().formulation;
+  t.grid = layout_grid(m, spacing);
   for (int i = 0; i < m.axis_count(); ++i) {
-    try {
-      t.grid.push_back(make_grid_axis(m, i, spacing[static_cast<size_t>(i)]));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(
-          fmt::format("axis {}: {}", axis_char(m.axis_order[static_cast<size_t>(i)]), e.what()));
-    }
     const AxisErrors* e = model.errors().errors_of(m.axis_order[static_cast<size_t>(i)]);
     if (e != nullptr && e->bidirectional()) t.bidirectional_axes.push_back(i);
   }
   t.channels = channels_for(m);
-  const std::int64_t nodes = total_nodes(t.grid);
-  const std::int64_t count = nodes * t.layer_count() * t.channel_count();
-  if (count > (std::int64_t{1} << 32))
-    throw std::invalid_argument(fmt::format(
-        "the table would hold {} values ({:.1f} GiB); choose a coarser spacing", count,
-        static_cast<double>(count) * 8.0 / (1 << 30)));
+  const std::size_t bytes = table_bytes(model, spacing, extra_channels);
+  if (bytes > max_bytes) {
+    std::string grid;
+    for (const GridAxis& g : t.grid) grid += fmt::format("{}{}", grid.empty() ? "" : " x ", g.count);
+    throw TableTooLarge(fmt::format(
+        "the table would take {:.2f} GiB ({} nodes, {} layer{}, {} channels), more than the cap "
+        "of {:.2f} GiB; give a coarser --spacing",
+        static_cast<double>(bytes) / (1 << 30), grid, t.layer_count(),
+        t.layer_count() > 1 ? "s" : "", t.channel_count() + extra_channels,
+        static_cast<double>(max_bytes) / (1 << 30)));
+  }
+  const std::int64_t count = total_nodes(t.grid) * t.layer_count() * t.channel_count();
   t.values.assign(static_cast<size_t>(count), 0.0);
   return t;
 }

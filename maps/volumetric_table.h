@@ -1,11 +1,17 @@
 // A gridded volumetric error table: at every grid node over the machine's
 // travel, the tool pose error dv (actual minus nominal, workpiece
-// coordinates, ErrorModel::exact) and, for three-axis machines, the
-// commanded-position correction du beside it (maps/axis_correction.h).
+// coordinates, ErrorModel::exact) and the commanded-position correction du
+// beside it: maps/axis_correction.h for three-axis machines,
+// CorrectionSolver (core/correction.h, Lei & Hsu 2003 eqs. 4-6) for
+// machines with two rotary axes.
 //
 // Channels (values in internal units, per node):
 //   three-axis: ex ey ez (dP, mm), ux uy uz (du, mm of axis X Y Z)
-//   more axes:  ex ey ez (dP, mm), ei ej ek (dQ, tool-axis error, unitless)
+//   five-axis:  ex ey ez (dP, mm), ei ej ek (dQ, tool-axis error, unitless),
+//               then u<axis> per axis in axis order (du: mm for linear
+//               axes, rad for rotary ones), e.g. ux uy uz ua uc
+//   other:      ex ey ez (dP, mm), ei ej ek (dQ)
+// and "u" (uncertainty, mm) last when present.
 // Direction layers: bidirectional error tables make the error depend on the
 // approach direction. The table holds one layer per combination of approach
 // directions of the bidirectional axes (2^b layers for b such axes): bit j
@@ -20,6 +26,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -75,15 +82,44 @@ struct VolumetricTable {
     return values.data() + (static_cast<std::int64_t>(layer) * node_count() + node) * channel_count();
   }
   std::size_t size_bytes() const { return values.size() * sizeof(double); }
+  /// Linear X, Y, Z only, with ux uy uz (maps/axis_correction.h).
+  bool three_axis_correction() const;
+  /// Rotary axes and a correction channel per axis (CorrectionSolver).
+  bool pose_correction() const;
+  /// Index of the first correction channel (u<first axis>), or -1.
+  int correction_channel() const;
 };
 
-/// Channel names for a machine: three-axis tables carry du, others dQ.
+/// "u" + the axis letter in lower case: the correction channel of an axis.
+std::string correction_channel_name(AxisName a);
+
+/// True for channels holding angles or unit-vector differences (rad or
+/// unitless; exported in urad): ei ej ek, and ua ub uc.
+bool is_angular_channel(const std::string& name);
+
+/// Channel names for a machine: three-axis tables carry du; machines the
+/// backward transformation handles (two rotary axes) dQ and du; others dQ.
 std::vector<std::string> channels_for(const Machine& m);
+
+/// Default cap of a table's values (make_table_layout, automatic spacing).
+inline constexpr std::size_t kMaxTableBytes = std::size_t{2} << 30;
 
 /// An empty table shaped for the machine: grid from spacing (per axis, mm
 /// or rad), channels, bidirectional axes from the errors; values allocated
-/// (zero). Throws std::invalid_argument on a bad spacing.
-VolumetricTable make_table_layout(const ErrorModel& model, const std::vector<double>& spacing);
+/// (zero). Throws std::invalid_argument on a bad spacing, and TableTooLarge
+/// (before allocating) when the values would exceed max_bytes.
+/// extra_channels: channels appended after channels_for's (e.g. "u").
+class TableTooLarge : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+VolumetricTable make_table_layout(const ErrorModel& model, const std::vector<double>& spacing,
+                                  std::size_t max_bytes = kMaxTableBytes,
+                                  int extra_channels = 0);
+/// Bytes the table of that spacing would take (no allocation); throws as
+/// make_table_layout does for a bad spacing.
+std::size_t table_bytes(const ErrorModel& model, const std::vector<double>& spacing,
+                        int extra_channels = 0);
 
 /// Interpolates all channels at axis position u (mm, rad) in one layer.
 /// Outside the grid: kError throws std::out_of_range naming the axis,

@@ -114,6 +114,7 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded, const std::
   // at the start, the mean of both directions).
   Vector3d h = Vector3d::Zero();
   Vector3d previous = commanded.empty() ? Vector3d::Zero() : commanded.front().motion.start_mm;
+  double path_mm = 0.0;  // travel of the measured moves so far
   for (const FeedMove& fm : commanded) {
     const Corrector& c = run.corrector(fm.tool_length_mm);
     const nc::Motion& m = fm.motion;
@@ -124,6 +125,7 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded, const std::
       throw InputError(name, fm.line, "this move is too long to sample (" + std::to_string(len) +
                                           " mm); check its coordinates");
     const int n = std::max(8, static_cast<int>(samples));
+    if (fm.measured) path_mm += len;
     for (int k = 0; k <= n; ++k) {
       const Vector3d x = nc::point_on(m, static_cast<double>(k) / n);
       for (int a = 0; a < 3; ++a) {
@@ -151,6 +153,7 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded, const std::
       if (!std::isfinite(best)) continue;
       sum2 += best * best;
       ++st.samples;
+      st.profile.add(path_mm - len + len * k / n, best * 1e3, 0.0, fm.line);
       if (best * 1e3 > st.max_um) {
         st.max_um = best * 1e3;
         st.worst_line = fm.line;

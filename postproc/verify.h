@@ -18,6 +18,7 @@
 
 #include "core/error_model.h"
 #include "gcode/nc_interpreter.h"
+#include "postproc/deviation_profile.h"
 
 namespace volmap::post {
 
@@ -26,6 +27,7 @@ struct DeviationStats {
   double rms_um = 0.0;
   std::uint64_t samples = 0;
   int worst_line = 0;  ///< line of the program where the maximum occurs
+  DeviationProfile profile;  ///< along the tool path, for verify --report
 };
 
 struct VerifyResult {

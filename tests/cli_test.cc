@@ -67,12 +67,14 @@ TEST(Cli, BadInputExitsOneWithOneLine) {
   EXPECT_NE(r.err.find("/nonexistent.json"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
 
+  // A value the option cannot take is a usage error (cli.md: status 2),
+  // still one line that says what is wrong.
   r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 1,2");
-  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("expected 3 values (X,Y,Z)"), std::string::npos) << r.err;
 
   r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 900,0,0");
-  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("outside the travel"), std::string::npos) << r.err;
 }
 

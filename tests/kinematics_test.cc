@@ -226,6 +226,37 @@ TEST(Backward, SingularPositionHoldsTheOuterAxis) {
   }
 }
 
+// Just off the singular position (tilts from 1e-9 to 1e-5 rad, above the
+// hold threshold) the outer angle is the tool axis's azimuth: the orientation
+// comes back to within rounding of the tilt, not to within the tilt itself
+// (the |z| = 1 form of subproblem 2 lost every tilt below ~1.5e-8 and gave
+// C = 0 mod 360 there).
+TEST(Backward, NearTheSingularPositionTheOuterAngleFollowsTheAzimuth) {
+  for (const char* name : {"lei-hsu-xyzac", "bc-table-table"}) {
+    SCOPED_TRACE(name);
+    const Machine m = load(name);
+    const Kinematics kin(m);
+    const Eigen::Vector3d w1 = kin.outer_axis_w();
+    const Eigen::Vector3d e1 = w1.unitOrthogonal(), e2 = w1.cross(e1);
+    for (double tilt : {1e-9, 3e-9, 1e-8, 1e-7, 1e-6, 1e-5}) {
+      for (double azimuth_deg : {10.0, 45.0, 100.0, 200.0, 300.0}) {
+        const double az = azimuth_deg * kDeg;
+        const Eigen::Vector3d Q =
+            (std::cos(tilt) * w1 + std::sin(tilt) * (std::cos(az) * e1 + std::sin(az) * e2)).normalized();
+        AxisVector prev = m.home;
+        bool singular = true;
+        const AxisVector u = kin.backward_selected(ToolPose{{10, 20, 30}, Q}, prev, &singular);
+        EXPECT_FALSE(singular) << tilt;
+        const ToolPose back = nominal_forward(m, u);
+        // The orientation: within a few ulps of Q, a hundredth of the tilt
+        // or better.
+        EXPECT_LT((back.axis - Q).norm(), std::max(1e-15, 0.01 * tilt)) << "tilt " << tilt << " azimuth " << azimuth_deg;
+        EXPECT_LT((back.tip_mm - Eigen::Vector3d(10, 20, 30)).norm(), 1e-9);
+      }
+    }
+  }
+}
+
 TEST(Backward, UnlimitedCIsUnwrappedNextToThePreviousValue) {
   const Machine m = load("lei-hsu-xyzac");
   const Kinematics kin(m);
@@ -437,9 +468,14 @@ TEST(Cli, KinematicsErrorsAreOneLineWithStatus1Or2) {
     EXPECT_TRUE(r.out.empty()) << r.out;
   };
   const std::string m = machine_arg("lei-hsu-xyzac");
-  for (const std::string& bad : {m + " --forward 10,20,x,0,0", m + " --forward 10,20,30,0",
-                                 m + " --forward 10,20,30,60,0",  // A outside -100..30
-                                 m + " --backward 0,0,0,0,0,2",   // not a unit vector
+  // Option values that do not parse or do not fit the machine: usage (2).
+  for (const std::string& usage : {m + " --forward 10,20,x,0,0", m + " --forward 10,20,30,0",
+                                   m + " --forward 10,20,30,60,0"}) {  // A outside -100..30
+    const Result r = run(usage);
+    EXPECT_EQ(r.status, 2) << usage;
+    one_line(r);
+  }
+  for (const std::string& bad : {m + " --backward 0,0,0,0,0,2",   // not a unit vector
                                  m + " --backward 0,0,0,0,0,-1",  // unreachable
                                  m + " --backward 1,2,3",
                                  std::string("kinematics --machine /nonexistent.json --forward 0,0,0,0,0")}) {

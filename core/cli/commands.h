@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <stdexcept>
 
 #include <CLI/CLI.hpp>
 
@@ -13,6 +14,15 @@ namespace volmap::cli {
 using Runner = std::function<int()>;
 /// Adds the subcommand to the app and returns its runner.
 using Registrar = std::function<Runner(CLI::App&)>;
+
+/// A command line that cannot be run as given (an option value that does
+/// not parse or does not fit the machine, two options naming one file): the
+/// CLI prints its one line and exits with status 2 (cli.md), as for the
+/// usage errors CLI11 finds itself.
+class UsageError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
 
 struct CommandRegistration {
   CommandRegistration(int order, Registrar registrar);

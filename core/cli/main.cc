@@ -55,6 +55,9 @@ int main(int argc, char** argv) {
   }
   try {
     for (const CLI::App* sub : app.get_subcommands()) return runners.at(sub)();
+  } catch (const volmap::cli::UsageError& e) {
+    std::cerr << "volmap: " << e.what() << " (see volmap " << (app.get_subcommands().empty() ? "" : app.get_subcommands().front()->get_name() + " ") << "--help)\n";
+    return 2;
   } catch (const std::exception& e) {
     std::string msg = e.what();
     for (char& c : msg)

@@ -1,5 +1,7 @@
 #include "core/cli/parse_util.h"
 
+#include "core/cli/commands.h"
+
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
@@ -22,7 +24,7 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& op
     const auto res = std::from_chars(cell.data(), cell.data() + cell.size(), v);
     if (cell.empty() || res.ec != std::errc() || res.ptr != cell.data() + cell.size() ||
         !std::isfinite(v))
-      throw std::invalid_argument(fmt::format("{} {}: \"{}\" is not a number", option, text, cell));
+      throw UsageError(fmt::format("{} {}: \"{}\" is not a number", option, text, cell));
     values.push_back(v);
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -36,7 +38,7 @@ AxisVector parse_axis_position(const Machine& m, const std::string& text,
   std::string order;
   for (AxisName a : m.axis_order) order += std::string(order.empty() ? "" : ",") + axis_char(a);
   if (static_cast<int>(values.size()) != m.axis_count())
-    throw std::invalid_argument(fmt::format(
+    throw UsageError(fmt::format(
         "{} {}: expected {} values ({}), got {}", option, text, m.axis_count(), order, values.size()));
   AxisVector u(m.axis_count());
   for (int i = 0; i < m.axis_count(); ++i)
@@ -45,7 +47,7 @@ AxisVector parse_axis_position(const Machine& m, const std::string& text,
   try {
     check_within_travel(m, u);
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(fmt::format("{} {}: {}", option, text, e.what()));
+    throw UsageError(fmt::format("{} {}: {}", option, text, e.what()));
   }
   return u;
 }

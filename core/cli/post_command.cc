@@ -8,20 +8,65 @@
 
 #include "core/atomic_file.h"
 #include "core/cli/commands.h"
+#include "core/cli/five_axis_options.h"
 #include "core/cli/program_setup.h"
 #include "core/errors_csv.h"
 #include "core/errors_import.h"
 #include "core/input_error.h"
 #include "core/machine_json.h"
+#include "maps/table_file.h"
+#include "postproc/five_axis_post.h"
 #include "postproc/post_program.h"
 
 namespace volmap::cli {
 namespace {
 
+// The five-axis path (postproc/five_axis_post.h).
+template <typename Opts>
+int run_five_axis(const Opts& o, const Machine& m) {
+  if (o.errors.empty() && o.table.empty()) throw std::invalid_argument("post needs --errors or --table");
+  post::FiveAxisPostOptions opt;
+  opt.form = o.five.form();
+  opt.tolerance_mm = o.tolerance_um * 1e-3;
+  opt.angle_tolerance_rad = o.five.angle_tolerance_urad * 1e-6;
+  opt.decimals = o.decimals;
+  opt.angle_decimals = o.five.angle_decimals;
+  opt.feed = o.five.feed_output == "per-minute" ? post::FeedOutput::kPerMinute : post::FeedOutput::kInverseTime;
+  opt.initial = o.five.initial(m, o.placement);
+  opt.outside = o.clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+  opt.correction_iterations = o.five.iterate ? 20 : 1;
+  std::ifstream file_in;
+  std::istream* in = &std::cin;
+  std::string in_name = "<stdin>";
+  if (o.in != "-") {
+    file_in.open(o.in, std::ios::binary);
+    if (!file_in) throw InputError(o.in, 0, "cannot open the program; check the path");
+    in = &file_in;
+    in_name = o.in;
+  }
+  AtomicOutput out(o.out, {o.in, o.machine, o.errors.empty() ? o.table : o.errors});
+  post::FiveAxisPostReport r;
+  if (!o.table.empty()) {
+    const maps::VolumetricTable t = maps::load_table(o.table);
+    r = post::post_five_axis(*in, in_name, out.stream(), m, t, opt);
+  } else {
+    r = post::post_five_axis(*in, in_name, out.stream(), m,
+                             load_errors(o.errors, parse_errors_format(o.errors_format)), opt);
+  }
+  out.commit();
+  if (isatty(2))
+    std::cerr << fmt::format("five-axis ({} input): {} lines, {} moves, {} poses ({} singular), {} lines added, "
+                             "max correction {:.2f} um / {:.2f} urad\n",
+                             post::input_form_name(r.form), r.lines, r.moves, r.poses, r.singular_poses,
+                             r.lines_added, r.max_correction_mm * 1e3, r.max_correction_rad * 1e6);
+  return 0;
+}
+
 Runner register_post(CLI::App& app) {
   struct Opts {
     std::string machine, errors, errors_format = "auto", table, in, out;
     ProgramSetupOptions placement;
+    FiveAxisCliOptions five;
     double tolerance_um = 1.0;
     int decimals = -1;
     bool clamp = false;
@@ -32,20 +77,25 @@ Runner register_post(CLI::App& app) {
   auto* errors = sub->add_option("--errors", o->errors, "Errors file: errors.md CSV, ISG CSV or Etalon exchange format");
   sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
       ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
-  auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map); not yet supported by post");
+  auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map) instead of --errors; five-axis machines only");
   errors->excludes(table);
-  sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)");
+  sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--decimals", o->decimals, "Decimals of rewritten numbers (default 4 in mm, 5 in inch)")->check(CLI::Range(0, 9));
   o->placement.add_to(*sub);
+  o->five.add_to(*sub, /*post=*/true);
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
   sub->footer("Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
-              "      --work-offset 100,100,50 part.ngc -o part-compensated.ngc");
+              "      --work-offset 100,100,50 part.ngc -o part-compensated.ngc\n"
+              "  volmap post --machine samples/machines/lei-hsu-xyzac.json --errors samples/errors/lei-hsu-xyzac.csv \\\n"
+              "      --part-origin 0,0,0 impeller-7bl-xyzac.ngc -o impeller-machine.ngc");
   return [o]() -> int {
-    if (o->errors.empty())
-      throw std::invalid_argument("post needs --errors (table input is not supported yet)");
     const Machine m = load_machine_json(o->machine);
+    if (o->five.applies(m)) return run_five_axis(*o, o->five.place_part(m));
+    if (o->errors.empty())
+      throw std::invalid_argument("post needs --errors (table input is supported for five-axis machines only)");
     const ErrorSet e = load_errors(o->errors, parse_errors_format(o->errors_format));
     const nc::ProgramSetup setup = o->placement.load(m);
     post::PostOptions opt;
