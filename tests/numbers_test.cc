@@ -61,6 +61,8 @@ TEST(Numbers, NonFiniteOptionsAreRefused) {
     cases.push_back(std::string("map ") + kHsu + " --tolerance-um " + b + " -o " + out);
     cases.push_back(std::string("map ") + kHsu + " --spacing 100,100,100 --repeatability-um " + b +
                     " -o " + out);
+    cases.push_back(std::string("map ") + kLei + " --tolerance-urad " + b + " -o " + out);
+    cases.push_back(std::string("map ") + kHsu + " --spacing 100,100,100 --max-table-gib " + b + " -o " + out);
     cases.push_back("kinematics --machine samples/machines/hsu-3axis.json --forward 1," + b + ",2");
     cases.push_back("kinematics --machine samples/machines/lei-hsu-xyzac.json --backward 0,0,0,0," + b + ",1");
     cases.push_back("sensitivity --machine samples/machines/hsu-3axis.json --at " + b + ",1,1");
