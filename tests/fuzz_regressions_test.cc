@@ -88,5 +88,17 @@ TEST(FuzzRegressions, HugeIntegerWordsAreRefusedOnTheirLine) {
   }
 }
 
+// Found by nc_reader_fuzz: the work offsets of G54-G59.3 that neither
+// --work-offset nor a .var file sets were uninitialised memory (Eigen
+// vectors are not zeroed by default); they are zero, as in LinuxCNC.
+TEST(FuzzRegressions, UnsetWorkOffsetsAreZero) {
+  const nc::ProgramSetup setup;
+  for (const Eigen::Vector3d& o : setup.work_offset_mm) EXPECT_EQ(o, Eigen::Vector3d::Zero());
+  nc::Interpreter interp(setup, "p.ngc");
+  nc::BlockEffect fx;
+  interp.execute(nc::lex_block("G59.3 G0 X1 Y2 Z3", 1, "p.ngc"), fx);
+  EXPECT_EQ(interp.state().position_mm, Eigen::Vector3d(1, 2, 3));
+}
+
 }  // namespace
 }  // namespace volmap::test
