@@ -148,6 +148,7 @@ std::string isg_csv_to_errors_csv(const std::string& text, const std::string& fi
       continue;
     }
     const std::vector<std::string> t = tokens(s);
+    if (t.empty()) continue;  // only separators (";", ",,"): no cell, as a blank line
     if (!in_block) {
       in_block = true;
       factor.assign(t.size(), 1.0);

@@ -1,6 +1,8 @@
 #include "core/json_input.h"
 
 #include <cmath>
+#include <cstdlib>
+#include <string_view>
 #include <istream>
 #include <iterator>
 
@@ -28,7 +30,42 @@ nlohmann::json parse_json_document(std::istream& in, const std::string& file) {
     const std::size_t colon = what.rfind(": ");
     if (colon != std::string::npos) what = what.substr(colon + 2);
     throw InputError(file, line, column, "malformed JSON (" + what + "); fix the syntax");
+  } catch (const nlohmann::json::out_of_range&) {
+    throw_json_number_overflow(text, file);
   }
+}
+
+void throw_json_number_overflow(const std::string& text, const std::string& file) {
+  int line = 1, column = 1;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i, ++column;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '-' || (c >= '0' && c <= '9')) {
+      std::size_t end = i;
+      while (end < text.size() && std::string_view("+-.eE0123456789").find(text[end]) != std::string_view::npos)
+        ++end;
+      const std::string number = text.substr(i, end - i);
+      if (!std::isfinite(std::strtod(number.c_str(), nullptr)))
+        throw InputError(file, line, column,
+                         fmt::format("number {} is too large for a double; give a finite number",
+                                     number.size() > 40 ? number.substr(0, 40) + "..." : number));
+      column += static_cast<int>(end - i);
+      i = end - 1;
+      continue;
+    }
+    if (c == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  throw InputError(file, 0, "a number is too large for a double; give finite numbers");
 }
 
 JsonObject::JsonObject(const std::string& file, const nlohmann::json& value, std::string path)

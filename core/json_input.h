@@ -20,6 +20,11 @@ namespace volmap {
 /// file:line:column.
 nlohmann::json parse_json_document(std::istream& in, const std::string& file);
 
+/// For a parse that failed with nlohmann's out_of_range (error 406: a number
+/// too large for a double, which carries no position): InputError at the
+/// line and column of the first such number in `text`.
+[[noreturn]] void throw_json_number_overflow(const std::string& text, const std::string& file);
+
 /// A JSON object at a path, with typed accessors that throw InputError.
 class JsonObject {
  public:

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/input_error.h"
+#include "core/json_input.h"
 
 namespace volmap {
 namespace {
@@ -109,6 +110,8 @@ Machine read_machine_json(std::istream& in, const std::string& file) {
     if (colon != std::string::npos) what = what.substr(colon + 2);
     throw InputError(file, line, col,
                      "malformed JSON: " + what + "; fix the syntax");
+  } catch (const json::out_of_range&) {
+    throw_json_number_overflow(text, file);
   }
 
   Reader r(file);

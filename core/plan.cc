@@ -15,6 +15,10 @@
 namespace volmap {
 namespace {
 
+// Readings of one plan at most: beyond, a typo in a step would fill the
+// memory (and a step count beyond long long is undefined behaviour).
+constexpr double kMaxPlanPoints = 1e7;
+
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kStill = 1e-12;  // mm or rad: an axis that moved less did not move
 
@@ -133,6 +137,9 @@ class Expander {
   /// Moves to u and takes a reading there.
   void visit(const JsonObject& t, const AxisVector& target, const Common& c, double feed,
              int forced_axis = -1, int forced_sign = 0) {
+    if (++points_ > kMaxPlanPoints)
+      t.fail("", fmt::format("the plan has more than {:g} points; use larger steps or fewer cycles",
+                             kMaxPlanPoints));
     AxisVector u = target;
     for (int i = 0; i < m_.axis_count(); ++i)
       u[i] = quantize_recorded_position(m_.axis_order[static_cast<std::size_t>(i)], u[i]);
@@ -194,7 +201,9 @@ class Expander {
       if (t.has("at")) base = positions_from(t.object("at"), cur_);
       std::vector<double> targets;
       const double sign = to > from ? 1.0 : -1.0;
-      const auto n = static_cast<long long>(std::floor(std::abs(to - from) / step + 1e-9));
+      const double count = std::floor(std::abs(to - from) / step + 1e-9);
+      if (!(count <= kMaxPlanPoints)) t.fail("step", "too many points; use a larger step");
+      const auto n = static_cast<long long>(count);
       for (long long k = 0; k <= n; ++k) targets.push_back(from + sign * static_cast<double>(k) * step);
       for (double feed : c.feeds) {
         for (int cycle = 0; cycle < c.cycles; ++cycle) {
@@ -357,6 +366,7 @@ class Expander {
   Eigen::Vector3d move_dir_ = Eigen::Vector3d::Zero();
   double t_ = 0.0;
   int run_ = 0;
+  double points_ = 0;  ///< readings planned so far (bounded by kMaxPlanPoints)
 };
 
 }  // namespace

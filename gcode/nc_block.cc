@@ -167,7 +167,9 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     if (letter == 'G' || letter == 'M') {
       const double scaled = v * 10.0;
       const double r = std::round(scaled);
-      if (std::abs(scaled - r) < 1e-6 && decimals <= 1 && v >= 0) w.code10 = static_cast<int>(r);
+      // Codes beyond G/M 99999 do not exist; a longer number stays -1 (an
+      // unknown code, refused by the interpreter) instead of overflowing int.
+      if (std::abs(scaled - r) < 1e-6 && decimals <= 1 && v >= 0 && r < 1e6) w.code10 = static_cast<int>(r);
     }
     b.words.push_back(w);
   }

@@ -12,6 +12,11 @@
 namespace volmap::nc {
 namespace {
 
+// Bounds of integer words (beyond them a number would overflow int, or a
+// helix would need more pieces than memory holds).
+constexpr double kMaxToolNumber = 99999;  // T, H and tool table numbers
+constexpr double kMaxArcTurns = 1000;     // P of G2/G3
+
 // Modal groups of G codes (code x 10), RS274NGC / LinuxCNC numbering.
 enum GGroup { kNonModal = 0, kMotion = 1, kPlane = 2, kDistance = 3, kArcDistance = 4,
               kFeedMode = 5, kUnits = 6, kCutterComp = 7, kToolLength = 8, kReturnMode = 10,
@@ -169,7 +174,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     s_.feed = f->value;
   }
   if (const Word* t = word('T')) {
-    if (t->value < 0 || t->value != std::floor(t->value)) fail(b, t, "T must be a non-negative integer");
+    if (t->value < 0 || t->value != std::floor(t->value) || t->value > kMaxToolNumber)
+      fail(b, t, fmt::format("T must be a non-negative integer up to {}", kMaxToolNumber));
     s_.selected_tool = static_cast<int>(t->value);
   }
   if (m[kMTool]) s_.tool = s_.selected_tool;
@@ -185,6 +191,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       s_.tool_length_mm = 0.0;
     } else if (c == 430) {
       const Word* h = word('H');
+      if (h && (h->value < 0 || h->value != std::floor(h->value) || h->value > kMaxToolNumber))
+        fail(b, h, fmt::format("H must be a non-negative integer up to {} (a tool number)", kMaxToolNumber));
       const int tool = h ? static_cast<int>(h->value) : s_.tool;
       auto it = setup_.tool_length_mm.find(tool);
       if (it == setup_.tool_length_mm.end())
@@ -316,7 +324,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       mo.center_mm[a0] = c2.x();
       mo.center_mm[a1] = c2.y();
       if (const Word* pw = word('P')) {
-        if (pw->value < 1 || pw->value != std::floor(pw->value)) fail(b, pw, "P (turns) must be a positive integer");
+        if (pw->value < 1 || pw->value != std::floor(pw->value) || pw->value > kMaxArcTurns)
+          fail(b, pw, fmt::format("P (turns) must be a positive integer up to {}", kMaxArcTurns));
         mo.extra_turns = static_cast<int>(pw->value) - 1;
       }
       (void)kN;
@@ -406,6 +415,11 @@ void read_tool_table(const std::string& path, ProgramSetup& setup) {
       } catch (const std::exception&) {
         throw InputError(path, n, fmt::format("bad entry \"{}\"; expected letter and number (T1 P1 Z12.5)", tok));
       }
+      if (!std::isfinite(v))  // std::stod reads nan and inf
+        throw InputError(path, n, fmt::format("bad entry \"{}\": not a finite number; give a length in mm", tok));
+      if (L == 'T' && (v < 0 || v != std::floor(v) || v > kMaxToolNumber))
+        throw InputError(path, n, fmt::format("bad entry \"{}\": a tool number is an integer from 0 to {}",
+                                              tok, kMaxToolNumber));
       if (L == 'T') tool = static_cast<int>(v);
       if (L == 'Z') z = v;
     }

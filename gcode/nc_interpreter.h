@@ -32,7 +32,13 @@ namespace volmap::nc {
 
 struct ProgramSetup {
   /// G54 .. G59.3 (index 0 .. 8): machine position of each program origin, mm.
-  std::array<Eigen::Vector3d, 9> work_offset_mm{};
+  /// Zero unless given (LinuxCNC's default; Eigen's default constructor
+  /// leaves a vector uninitialised, so `{}` alone would not zero them).
+  std::array<Eigen::Vector3d, 9> work_offset_mm = [] {
+    std::array<Eigen::Vector3d, 9> zero;
+    zero.fill(Eigen::Vector3d::Zero());
+    return zero;
+  }();
   /// Tool table: tool (pocket) number -> length, mm.
   std::map<int, double> tool_length_mm;
   /// Where the tool stands when the program starts (machine coordinates, mm),

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <ostream>
+#include <stdexcept>
 #include <vector>
 
 #include <fmt/format.h>
@@ -187,6 +188,9 @@ class ProgramPost {
   } start_dev_;
 };
 
+// Pieces of one move at most (an arc's initial pieces, and all pieces).
+constexpr int kMaxArcPieces = 1 << 16;
+
 const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                         const Vector3d& start_cmd) {
   const double tol = options_.tolerance_mm;
@@ -196,7 +200,13 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
     const nc::ArcGeometry g = nc::arc_geometry(m);
     const double r = std::max(g.radius, g.end_radius);
     const double max_step = r > tol / 4 ? 2.0 * std::acos(1.0 - (tol / 4) / r) : M_PI / 2;
-    n0 = std::max(4, static_cast<int>(std::ceil(std::abs(g.sweep) / max_step)));
+    const double pieces = std::ceil(std::abs(g.sweep) / max_step);
+    if (!(pieces <= kMaxArcPieces))  // also NaN: never cast to int out of range
+      throw InputError(file_, current_line_,
+                       fmt::format("the arc needs more than {} pieces to keep {:g} um (radius {:g} mm); "
+                                   "raise --tolerance-um or check the arc's centre",
+                                   kMaxArcPieces, tol * 1e3, r));
+    n0 = std::max(4, static_cast<int>(pieces));
   }
   std::vector<Piece>& done = pieces_;
   std::vector<Pending>& stack = stack_;
@@ -204,7 +214,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
   stack.clear();
   Vector3d c_prev = start_cmd;
   double s_prev = 0.0;
-  constexpr int kMaxPieces = 1 << 16;
+  constexpr int kMaxPieces = kMaxArcPieces;
   for (int k = 1; k <= n0; ++k) {
     stack.push_back({s_prev, static_cast<double>(k) / n0, c_prev, last_dir_});
     while (!stack.empty()) {
@@ -530,7 +540,8 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
 PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
                         const Machine& machine, const ErrorSet& errors,
                         const nc::ProgramSetup& setup, const PostOptions& options) {
-  if (!(options.tolerance_mm > 0)) throw std::invalid_argument("--tolerance-um must be positive");
+  if (!(options.tolerance_mm > 0) || !std::isfinite(options.tolerance_mm))
+    throw std::invalid_argument("--tolerance-um must be a positive finite number");
   ProgramPost post(in_name, out, machine, errors, setup, options);
   // Lines out of a large buffer (getline's per-line work and copies avoided);
   // the buffer grows only to hold the longest line.
@@ -561,6 +572,13 @@ PostReport post_program(std::istream& in, const std::string& in_name, std::ostre
       end += got;
       if (got == 0) eof = true;
     }
+  } catch (const std::out_of_range& e) {
+    // An error table's range (the message names the table's file:line):
+    // the block that left it is the program's line (docs/model.md).
+    post.flush();
+    throw InputError(in_name, number,
+                     std::string("this block leaves the error tables: ") + e.what() +
+                         " (volmap post --clamp holds the end values)");
   } catch (...) {
     post.flush();
     throw;

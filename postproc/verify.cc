@@ -6,8 +6,11 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
+#include "core/input_error.h"
 #include "gcode/nc_path.h"
 #include "postproc/corrector.h"
 
@@ -84,8 +87,26 @@ class Run {
   std::map<double, std::unique_ptr<Corrector>> correctors_;
 };
 
+DeviationStats measure_moves(const std::vector<FeedMove>& commanded, const std::vector<FeedMove>& nominal,
+                             Run& run, double step_mm, const std::string& name, int& line);
+
+// As measure_moves; an error table left (std::out_of_range from the model,
+// naming the table) is reported at the program's line, and a move too long
+// to sample is refused there.
 DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector<FeedMove>& nominal,
-                       Run& run, double step_mm) {
+                       Run& run, double step_mm, const std::string& name) {
+  int line = 0;
+  try {
+    return measure_moves(commanded, nominal, run, step_mm, name, line);
+  } catch (const std::out_of_range& e) {
+    throw InputError(name, line,
+                     std::string("this block leaves the error tables: ") + e.what() +
+                         " (volmap verify --clamp holds the end values)");
+  }
+}
+
+DeviationStats measure_moves(const std::vector<FeedMove>& commanded, const std::vector<FeedMove>& nominal,
+                             Run& run, double step_mm, const std::string& name, int& line) {
   DeviationStats st;
   double sum2 = 0;
   size_t cursor = 0;
@@ -97,8 +118,13 @@ DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector
   for (const FeedMove& fm : commanded) {
     const Corrector& c = run.corrector(fm.tool_length_mm);
     const nc::Motion& m = fm.motion;
+    line = fm.line;
     const double len = nc::path_length_mm(m);
-    const int n = std::max(8, static_cast<int>(std::ceil(len / step_mm)));
+    const double samples = std::ceil(len / step_mm);
+    if (!(samples <= 1e8))  // also NaN: never cast to int out of range
+      throw InputError(name, fm.line, "this move is too long to sample (" + std::to_string(len) +
+                                          " mm); check its coordinates");
+    const int n = std::max(8, static_cast<int>(samples));
     if (fm.measured) path_mm += len;
     for (int k = 0; k <= n; ++k) {
       const Vector3d x = nc::point_on(m, static_cast<double>(k) / n);
@@ -151,8 +177,8 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
   std::vector<FeedMove> nominal_path;
   for (const FeedMove& f : nom)
     if (f.measured) nominal_path.push_back(f);
-  r.before = measure(nom, nominal_path, run, options.sample_step_mm);
-  r.after = measure(out, nominal_path, run, options.sample_step_mm);
+  r.before = measure(nom, nominal_path, run, options.sample_step_mm, nominal_name);
+  r.after = measure(out, nominal_path, run, options.sample_step_mm, compensated_name);
   return r;
 }
 

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "core/cli/commands.h"
+#include "core/cli/option_checks.h"
 #include "core/errors_import.h"
 #include "core/machine_json.h"
 #include "maps/factorized_table.h"
@@ -102,15 +103,16 @@ Runner register_map(CLI::App& app) {
       "Automatic spacing: the coarsest grid whose interpolation error of the tool-tip error "
       "(and of the three-axis correction) against the model stays below this (um; default 1 "
       "without --spacing)");
-  tol_um->excludes(spacing);
+  tol_um->check(kFinitePositive)->excludes(spacing);
   sub->add_option("--tolerance-urad", o->tolerance_urad,
                   "Automatic spacing, machines with rotary axes: the same bound for the tool-axis "
                   "error dQ (urad; default 1 without --spacing)")
+      ->check(kFinitePositive)
       ->excludes(spacing);
   sub->add_option("--max-table-gib", o->max_table_gib,
                   "Refuse tables larger than this (GiB, default 2); the table is held in memory "
                   "whole")
-      ->check(CLI::PositiveNumber);
+      ->check(kFinitePositive);
   sub->add_option("--interpolation", o->interpolation,
                   "Interpolation the tolerance is checked with: linear (default, as controllers "
                   "do) or cubic")
@@ -134,10 +136,10 @@ Runner register_map(CLI::App& app) {
   sub->add_option("--repeatability-um", o->repeatability_um,
                   "Standard uncertainty of every translational error of the errors file, um (default: "
                   "its '# repeatability_um:' metadata); adds the per-node uncertainty u")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kFiniteNonNegative);
   sub->add_option("--repeatability-urad", o->repeatability_urad,
                   "Standard uncertainty of every angular error, urad (default: '# repeatability_urad:')")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kFiniteNonNegative);
   sub->add_option("--covariance", o->covariance,
                   "volmap identify --json report: propagate the covariance of the identified "
                   "location errors to the per-node uncertainty u (replaces their repeatability)");

@@ -1,0 +1,107 @@
+// What each libFuzzer target does with one input (tests/fuzz/*_fuzz.cc),
+// shared with tests/fuzz_regressions_test.cc, which replays the seed
+// corpora and every input a fuzzer has found (tests/fuzz/regressions/) in
+// the ordinary test suite (and so under the sanitizers of .ci/run).
+//
+// The only acceptable failure of a reader is volmap::InputError; any other
+// exception escapes (a bug: its message would not name file and line), and a
+// non-finite number in what was read calls std::abort (it would reach an
+// output).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include "core/errors_import.h"
+#include "core/input_error.h"
+#include "core/machine_json.h"
+#include "core/recordings.h"
+#include "gcode/nc_block.h"
+#include "gcode/nc_interpreter.h"
+
+namespace volmap::fuzz {
+
+inline void require(bool ok) {
+  if (!ok) std::abort();
+}
+
+/// The NC reader: lexing and interpretation line by line, as volmap post
+/// and verify read a program, with and without a known initial position.
+inline void nc_reader(std::string_view program) {
+  for (bool initial : {false, true}) {
+    nc::ProgramSetup setup;
+    setup.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
+    setup.work_offset_mm[1] = Eigen::Vector3d(-10, 5, 0);
+    setup.tool_length_mm[1] = 50.0;
+    setup.tool_length_mm[2] = 120.5;
+    if (initial) setup.initial_position_mm = Eigen::Vector3d(0, 0, 300);
+    nc::Interpreter interp(setup, "fuzz.ngc");
+    nc::BlockEffect fx;
+    int number = 0;
+    size_t pos = 0;
+    try {
+      while (pos <= program.size()) {
+        size_t eol = program.find('\n', pos);
+        if (eol == std::string_view::npos) eol = program.size();
+        std::string_view text = program.substr(pos, eol - pos);
+        if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+        const nc::Block b = nc::lex_block(text, ++number, "fuzz.ngc");
+        interp.execute(b, fx);
+        if (fx.has_motion) {
+          const nc::Motion& m = fx.motion;
+          require(m.start_mm.allFinite() && m.end_mm.allFinite() && m.center_mm.allFinite() &&
+                  std::isfinite(m.r_mm) && std::isfinite(m.clear_mm) && std::isfinite(m.feed));
+        }
+        require(interp.state().position_mm.allFinite());
+        pos = eol + 1;
+      }
+    } catch (const InputError&) {
+    }
+  }
+}
+
+/// The recordings CSV reader, and the writer on what it read.
+inline void recordings_csv(std::string_view text) {
+  std::istringstream in{std::string(text)};
+  try {
+    const Recordings r = read_recordings_csv(in, "fuzz.csv");
+    r.check_consistent();
+    std::ostringstream out;
+    write_recordings_csv(out, r);
+  } catch (const InputError&) {
+  }
+}
+
+/// The errors readers: errors.md CSV and, by format detection, ISG CSV and
+/// the Etalon exchange format.
+inline void errors_csv(std::string_view text) {
+  std::istringstream in{std::string(text)};
+  try {
+    (void)read_errors(in, "fuzz.csv", ErrorsFormat::kAuto);
+  } catch (const InputError&) {
+  }
+}
+
+/// The machine definition reader, and the nominal forward transformation
+/// in the middle of the travel of what it read.
+inline void machine_json(std::string_view text) {
+  std::istringstream in{std::string(text)};
+  try {
+    const Machine m = read_machine_json(in, "fuzz.json");
+    AxisVector u(m.axis_count());
+    for (int i = 0; i < m.axis_count(); ++i) {
+      const AxisLimits& L = m.limits[static_cast<size_t>(i)];
+      u[i] = L.unlimited ? 0.0 : 0.5 * L.min + 0.5 * L.max;
+    }
+    const ToolPose p = nominal_forward(m, u);
+    require(p.tip_mm.allFinite() && p.axis.allFinite());
+  } catch (const InputError&) {
+  }
+}
+
+}  // namespace volmap::fuzz
