@@ -40,7 +40,22 @@ AtomicOutput::AtomicOutput(std::string path, const std::vector<std::string>& inp
     : path_(std::move(path)) {
   refuse_output_equal_to_input(path_, inputs);
   if (path_ == "-") {
+    // Spooled: nothing reaches standard output before commit().
     to_stdout_ = true;
+    std::error_code ec;
+    std::filesystem::path dir = std::filesystem::temp_directory_path(ec);
+    if (ec) dir = "/tmp";
+    std::string templ = (dir / "volmap-stdout-XXXXXX").string();
+    const int fd = ::mkstemp(templ.data());
+    if (fd < 0) {
+      const std::string reason = std::generic_category().message(errno);
+      throw std::runtime_error("<stdout>: cannot create the spool file in " + dir.string() + " (" + reason +
+                               "); set TMPDIR to a writable folder");
+    }
+    ::close(fd);
+    temp_path_ = templ;
+    file_.open(temp_path_, std::ios::binary | std::ios::trunc);
+    if (!file_) throw std::runtime_error("<stdout>: cannot open the spool file " + temp_path_);
     return;
   }
   temp_path_ = path_ + ".tmp-" + std::to_string(::getpid()) + "-" +
@@ -54,23 +69,32 @@ AtomicOutput::AtomicOutput(std::string path, const std::vector<std::string>& inp
 }
 
 AtomicOutput::~AtomicOutput() {
-  if (committed_ || to_stdout_) return;
+  if (committed_) return;
   file_.close();
   std::remove(temp_path_.c_str());
 }
 
-std::ostream& AtomicOutput::stream() {
-  if (to_stdout_) return buffer_;
-  return file_;
-}
+std::ostream& AtomicOutput::stream() { return file_; }
 
 void AtomicOutput::commit() {
   if (committed_) return;
   if (to_stdout_) {
-    std::cout << buffer_.str();
+    file_.flush();
+    const bool ok = static_cast<bool>(file_);
+    file_.close();
+    committed_ = true;
+    if (!ok) {
+      std::remove(temp_path_.c_str());
+      throw std::runtime_error("<stdout>: write error in the spool file " + temp_path_ +
+                               "; check the free space in TMPDIR");
+    }
+    {
+      std::ifstream spool(temp_path_, std::ios::binary);
+      if (spool.peek() != std::ifstream::traits_type::eof()) std::cout << spool.rdbuf();
+    }
+    std::remove(temp_path_.c_str());
     std::cout.flush();
     if (!std::cout) throw std::runtime_error("<stdout>: write error");
-    committed_ = true;
     return;
   }
   file_.flush();

@@ -8,8 +8,9 @@
 //   out.commit();                               // rename (or flush to stdout)
 // Without commit() (an exception on the way), the destructor removes the
 // temporary file and the destination is untouched. "-" writes standard
-// output; its text is held in memory until commit(), so a failure writes
-// nothing there either.
+// output; its text is spooled to a temporary file (in TMPDIR, or /tmp) and
+// copied out at commit(), so a failure writes nothing there either, and a
+// program of any size streams through in constant memory.
 #pragma once
 
 #include <fstream>
@@ -47,7 +48,6 @@ class AtomicOutput {
   std::string path_;
   std::string temp_path_;
   std::ofstream file_;
-  std::ostringstream buffer_;  ///< for "-"
   bool to_stdout_ = false;
   bool committed_ = false;
 };

@@ -171,6 +171,18 @@ TEST(BadInputCatalogue, StandardInputIsNamedInMessages) {
   const CliResult to_stdout = run_volmap_in_source(post + "-o - < tests/bad/nc/o_word_sub.ngc");
   EXPECT_EQ(to_stdout.status, 1);
   EXPECT_EQ(to_stdout.err.rfind("volmap: <stdin>:4:1: O-word", 0), 0u) << to_stdout.err;
+  // Standard output too gets nothing, even when the failure comes after
+  // lines that were already post-processed (they are spooled, not streamed).
+  EXPECT_TRUE(to_stdout.out.empty()) << to_stdout.out;
+  const std::string late_program = (d / "late.ngc").string();
+  std::ofstream(late_program) << "G21 G90\nG0 X10 Y10 Z10\nG1 X20 F100\nG1 X30\nG41 X40\n";
+  const CliResult late = run_volmap_in_source(
+      "post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv "
+      "--work-offset 250,200,100 " + late_program + " -o -");
+  EXPECT_EQ(late.status, 1);
+  EXPECT_NE(late.err.find("late.ngc:5:"), std::string::npos) << late.err;
+  EXPECT_TRUE(late.out.empty()) << late.out;
+  fs::remove(late_program);
   const CliResult errors = run_volmap_in_source(
       "map --machine samples/machines/hsu-3axis.json --errors - --spacing 100,100,100 -o " +
       (d / "t.vmt").string() + " < tests/data/errors/bad/nan_cell.csv");

@@ -114,13 +114,8 @@ Runner register_post(CLI::App& app) {
     std::vector<std::string> inputs{o->in, o->machine, o->errors};
     if (!o->placement.var_file.empty()) inputs.push_back(o->placement.var_file);
     if (!o->placement.tool_table.empty()) inputs.push_back(o->placement.tool_table);
-    if (o->out == "-") {
-      // Streams straight out (constant memory); a failure part-way leaves a
-      // partial standard output and a non-zero exit status.
-      post::post_program(*in, in_name, std::cout, m, e, setup, opt);
-      std::cout.flush();
-      return 0;
-    }
+    // "-": spooled to a temporary file and copied out when complete
+    // (core/atomic_file.h): constant memory, and nothing on failure.
     AtomicOutput out(o->out, inputs);
     const post::PostReport r = post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
     out.commit();
