@@ -147,6 +147,9 @@ ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
   // Bind against the stored machine_ (the joints must outlive the model).
   bind(machine_.workpiece_chain, ChainSide::kWorkpiece, workpiece_);
   bind(machine_.tool_chain, ChainSide::kTool, tool_);
+  all_linear_ = workpiece_.size() + tool_.size() <= 6;
+  for (const auto* chain : {&workpiece_, &tool_})
+    for (const BoundJoint& bj : *chain) all_linear_ = all_linear_ && !bj.joint->rotary;
 
   // Measurement levers of the independent formulation.
   std::vector<Eigen::Isometry3d> frames;
@@ -257,6 +260,26 @@ class AxisTurn {
 };
 }  // namespace
 
+[[gnu::always_inline]] inline void ErrorModel::joint_error(const BoundJoint& bj, double q, int dir,
+                                                          Eigen::Matrix3d& R, Eigen::Vector3d& delta,
+                                                          std::uint64_t& clamped) const {
+  if (!bj.components) {
+    R.setIdentity();
+    delta.setZero();
+    return;
+  }
+  std::array<double, kComponentCount> v;
+  evaluate_axis(*bj.components, q, dir, options_.outside, v, &clamped);
+  small_rotation_into(Eigen::Vector3d(v[3], v[4], v[5]), R);
+  delta = Eigen::Vector3d(v[0], v[1], v[2]);
+  if (bj.independent) {
+    const Eigen::Vector3d r = bj.side == ChainSide::kWorkpiece
+                                  ? Eigen::Vector3d(bj.r_meas_mm - q * bj.joint->direction_parent)
+                                  : bj.r_meas_mm;
+    delta -= R * r - r;
+  }
+}
+
 // The exact model as point and direction transformations, never matrix
 // products: the tool tip and tool axis are carried from the spindle down the
 // tool chain to the base (p_b = T_b_s p_s), then up the workpiece chain into
@@ -278,26 +301,9 @@ void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir,
   for (int k = 0; k < n_work + n_tool; ++k) {
     const BoundJoint& bj = k < n_work ? workpiece_[static_cast<size_t>(k)]
                                       : tool_[static_cast<size_t>(k - n_work)];
-    const Joint& j = *bj.joint;
-    const double q = u[j.index];
-    Eigen::Matrix3d& R = R_e[static_cast<size_t>(k)];
-    Eigen::Vector3d& delta = delta_e[static_cast<size_t>(k)];
-    if (!bj.components) {
-      R.setIdentity();
-      delta.setZero();
-      continue;
-    }
-    std::array<double, kComponentCount> v;
-    evaluate_axis(*bj.components, q, dir[static_cast<size_t>(j.index)], options_.outside, v,
-                  &clamped);
-    small_rotation_into(Eigen::Vector3d(v[3], v[4], v[5]), R);
-    delta = Eigen::Vector3d(v[0], v[1], v[2]);
-    if (bj.independent) {
-      const Eigen::Vector3d r = bj.side == ChainSide::kWorkpiece
-                                    ? Eigen::Vector3d(bj.r_meas_mm - q * j.direction_parent)
-                                    : bj.r_meas_mm;
-      delta -= R * r - r;
-    }
+    const int i = bj.joint->index;
+    joint_error(bj, u[i], dir[static_cast<size_t>(i)], R_e[static_cast<size_t>(k)],
+                delta_e[static_cast<size_t>(k)], clamped);
   }
   if (clamped) clamped_->fetch_add(clamped, std::memory_order_relaxed);
 
@@ -368,6 +374,76 @@ PoseError ErrorModel::exact(const AxisVector& u,
   ToolPose a, n;
   evaluate(u, dir, a, n);
   return PoseError{a.tip_mm - n.tip_mm, a.axis - n.axis};
+}
+
+namespace {
+// p <- R p and p <- R^T p on the point alone, each coordinate summed in the
+// order of PointDir::rotate / rotate_transposed (the same roundings).
+[[gnu::always_inline]] inline Eigen::Vector3d rotated(const Eigen::Matrix3d& R, const Eigen::Vector3d& p) {
+  Eigen::Vector3d r;
+  for (int i = 0; i < 3; ++i) r[i] = R(i, 0) * p[0] + R(i, 1) * p[1] + R(i, 2) * p[2];
+  return r;
+}
+[[gnu::always_inline]] inline Eigen::Vector3d rotated_back(const Eigen::Matrix3d& R, const Eigen::Vector3d& p) {
+  Eigen::Vector3d r;
+  for (int i = 0; i < 3; ++i) r[i] = R(0, i) * p[0] + R(1, i) * p[1] + R(2, i) * p[2];
+  return r;
+}
+}  // namespace
+
+// evaluate() for linear joints only, on the tool tip alone: the same
+// operations in the same order (PointDir's lane 0), so the result is exact()'s
+// to the bit (tests/error_model_test.cc checks it). A joint whose axis value
+// and approach direction are those of the cached entry reuses its E(q).
+Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir,
+                                             JointCache& cache) const {
+  const int n_work = static_cast<int>(workpiece_.size());
+  const int n_tool = static_cast<int>(tool_.size());
+  std::uint64_t clamped = 0;
+  for (int k = 0; k < n_work + n_tool; ++k) {
+    const BoundJoint& bj = k < n_work ? workpiece_[static_cast<size_t>(k)]
+                                      : tool_[static_cast<size_t>(k - n_work)];
+    const int i = bj.joint->index;
+    const double q = u[i];
+    const int d = bj.components && bj.components->bidirectional() ? dir[static_cast<size_t>(i)] : 0;
+    JointCache::Entry& e = cache.joint[static_cast<size_t>(k)];
+    if (!(e.q == q && e.dir == d)) {
+      e.clamped = 0;
+      joint_error(bj, q, d, e.R, e.delta_mm, e.clamped);
+      e.q = q;
+      e.dir = d;
+    }
+    clamped += e.clamped;
+  }
+  if (clamped) clamped_->fetch_add(clamped, std::memory_order_relaxed);
+
+  Eigen::Vector3d a = machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis;
+  Eigen::Vector3d n = a;
+  for (int k = n_tool - 1; k >= 0; --k) {
+    const BoundJoint& bj = tool_[static_cast<size_t>(k)];
+    const JointCache::Entry& e = cache.joint[static_cast<size_t>(n_work + k)];
+    const Eigen::Vector3d motion = u[bj.joint->index] * bj.joint->direction_parent;
+    n += motion;
+    a = rotated(e.R, a);  // Trans(q d) E(q)
+    a += e.delta_mm;
+    a += motion;
+    n += bj.joint->offset_parent_mm;
+    if (bj.has_location_rotation) a = rotated(bj.R_parent_loc, a);
+    a += bj.t_parent_loc_mm;
+  }
+  for (int k = 0; k < n_work; ++k) {
+    const BoundJoint& bj = workpiece_[static_cast<size_t>(k)];
+    const JointCache::Entry& e = cache.joint[static_cast<size_t>(k)];
+    const Eigen::Vector3d motion = u[bj.joint->index] * bj.joint->direction_parent;
+    n -= bj.joint->offset_parent_mm;
+    a -= bj.t_parent_loc_mm;
+    if (bj.has_location_rotation) a = rotated_back(bj.R_parent_loc, a);
+    n -= motion;
+    a -= e.delta_mm;
+    a -= motion;
+    a = rotated_back(e.R, a);
+  }
+  return (a - machine_.workpiece_origin_mm) - (n - machine_.workpiece_origin_mm);
 }
 
 void ErrorModel::levers(const AxisVector& u, std::vector<JointLever>& out) const {

@@ -166,6 +166,7 @@ class ProgramPost {
     double s0, s1;
     Vector3d c0;
     ApproachDirections dir0;  ///< axis directions on arrival at s0
+    bool stepped = false;     ///< the take-up step at s0 was commanded
   };
   std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
   std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
@@ -216,7 +217,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
   double s_prev = 0.0;
   constexpr int kMaxPieces = kMaxArcPieces;
   for (int k = 1; k <= n0; ++k) {
-    stack.push_back({s_prev, static_cast<double>(k) / n0, c_prev, last_dir_});
+    stack.push_back({s_prev, static_cast<double>(k) / n0, c_prev, last_dir_, false});
     while (!stack.empty()) {
       const Pending p = stack.back();
       stack.pop_back();
@@ -270,6 +271,25 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         if (sample && dev0_exact && 0.75 * dev0 - kResidual - 0.75 * chord - 1e-12 > tol) {
           sample = false;
           ok = false;
+          if (!p.stepped) {
+            // The step stands at the start (lost motion taken up at a
+            // reversal): halving would close in on it in some thirty levels
+            // to a piece shorter than 1e-9 of the move. The take-up is
+            // commanded at once instead, at the start point with the new
+            // directions (the actual tip stays on the start point while the
+            // play is taken up), and the piece goes on from there.
+            const Vector3d c_step = command(c, n0p, d);
+            done.push_back({c_step, p.s0});
+            c_prev = c_step;
+            s_prev = p.s0;
+            last_dir_ = d;
+            Pending rest = p;
+            rest.c0 = c_step;
+            rest.dir0 = d;
+            rest.stepped = true;
+            stack.push_back(rest);
+            continue;
+          }
         }
       }
       for (double t : {0.25, 0.5, 0.75}) {
@@ -297,12 +317,12 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         if (!stack.empty()) {
           const double end = stack.front().s1;
           stack.clear();
-          stack.push_back({p.s1, end, c1, d});
+          stack.push_back({p.s1, end, c1, d, false});
         }
       } else {
         const double mid = 0.5 * (p.s0 + p.s1);
-        stack.push_back({mid, p.s1, Vector3d::Zero(), p.dir0});  // c0, dir0 set when reached
-        stack.push_back({p.s0, mid, p.c0, p.dir0});
+        stack.push_back({mid, p.s1, Vector3d::Zero(), p.dir0, false});  // c0, dir0 set when reached
+        stack.push_back({p.s0, mid, p.c0, p.dir0, p.stepped});
       }
     }
   }

@@ -326,3 +326,67 @@ TEST(Kinematics, LinearAxesForTipReachTheTip) {
 }
 }  // namespace
 }  // namespace volmap
+
+namespace volmap {
+namespace {
+
+// The post-processor's three-axis evaluator is exact()'s arithmetic on the
+// tool tip alone: the same numbers to the bit, also when it reuses a joint's
+// error transform (an axis standing where it stood, with the same approach
+// direction) and when the joints sit on the workpiece side.
+TEST(ErrorModel, TipErrorLinearIsExactToTheBitWithItsCache) {
+  // A bed-type machine: X and Y carry the workpiece, Z the spindle; the
+  // location errors give every joint a rotated location frame.
+  std::istringstream bed(R"({
+    "format": "volmap-machine/1", "name": "bed-3axis", "structure": "[w X' Y' b Z t]",
+    "axes": {
+      "X": {"type": "linear", "direction": [1, 0, 0], "travel_mm": [0, 500]},
+      "Y": {"type": "linear", "direction": [0, 1, 0], "travel_mm": [0, 400]},
+      "Z": {"type": "linear", "direction": [0, 0, 1], "travel_mm": [0, 300]}},
+    "workpiece_chain": [{"axis": "Y", "offset_mm": [0, 0, 50]}, {"axis": "X", "offset_mm": [0, 0, 80]}],
+    "tool_chain": [{"axis": "Z", "offset_mm": [0, 0, 600]}],
+    "spindle_offset_mm": [0, 0, -150], "tool": {"length_mm": 120, "axis": [0, 0, 1]},
+    "workpiece_origin_mm": [0, 0, 30],
+    "measured_at": {"X": {"Y": 200, "Z": 100}, "Y": {"X": 250, "Z": 100}, "Z": {"X": 250, "Y": 200}}})");
+  std::mt19937 rng(7);
+  const Machine bed_machine = read_machine_json(bed, "<bed>");
+  ErrorSet bed_errors = random_errors(bed_machine, 30.0, rng);  // 0.6 mm, 0.6 mrad: second order shows
+  for (const char* n : {"EA0X", "EB0Y", "EC0Z", "EA0Z", "EC0X"}) bed_errors.location[n] = 2e-4;
+  struct Case {
+    Machine machine;
+    ErrorSet errors;
+  };
+  const Case cases[] = {
+      {hsu3(), load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv"))},  // bidirectional
+      {bed_machine, bed_errors}};
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.machine.name);
+    const ErrorModel model(k.machine, k.errors);
+    ASSERT_TRUE(model.all_joints_linear());
+    ErrorModel::JointCache cache;
+    std::uniform_real_distribution<double> f(0.0, 1.0);
+    std::uniform_int_distribution<int> die(-1, 1), coin(0, 2);
+    double u[3] = {10, 10, 10};
+    ApproachDirections dir{};
+    for (int trial = 0; trial < 3000; ++trial) {
+      // Each axis moves, or stays (the cache holds), or turns round in place.
+      for (int a = 0; a < 3; ++a) {
+        const int what = coin(rng);
+        if (what == 0) u[a] = k.machine.limits[static_cast<size_t>(a)].min +
+                              f(rng) * (k.machine.limits[static_cast<size_t>(a)].max -
+                                        k.machine.limits[static_cast<size_t>(a)].min);
+        if (what != 1) dir[static_cast<size_t>(a)] = static_cast<std::int8_t>(die(rng));
+      }
+      AxisVector uv(3);
+      uv << u[0], u[1], u[2];
+      const Eigen::Vector3d want = model.exact(uv, dir).dP_mm;
+      const Eigen::Vector3d got = model.tip_error_linear(u, dir, cache);
+      for (int i = 0; i < 3; ++i) ASSERT_EQ(got[i], want[i]) << "trial " << trial << " coordinate " << i;
+    }
+  }
+  // A machine with a rotary joint is not for it.
+  EXPECT_FALSE(ErrorModel(lei_hsu(), ErrorSet{}).all_joints_linear());
+}
+
+}  // namespace
+}  // namespace volmap
