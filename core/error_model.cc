@@ -393,10 +393,11 @@ namespace {
 
 // evaluate() for linear joints only, on the tool tip alone: the same
 // operations in the same order (PointDir's lane 0), so the result is exact()'s
-// to the bit (tests/error_model_test.cc checks it). A joint whose axis value
-// and approach direction are those of the cached entry reuses its E(q).
-Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir,
-                                             JointCache& cache) const {
+// to the bit (tests/error_model_test.cc checks it).
+Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir) const {
+  constexpr int kMaxJoints = 6;
+  std::array<Eigen::Matrix3d, kMaxJoints> R_e;
+  std::array<Eigen::Vector3d, kMaxJoints> delta_e;
   const int n_work = static_cast<int>(workpiece_.size());
   const int n_tool = static_cast<int>(tool_.size());
   std::uint64_t clamped = 0;
@@ -404,16 +405,8 @@ Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDire
     const BoundJoint& bj = k < n_work ? workpiece_[static_cast<size_t>(k)]
                                       : tool_[static_cast<size_t>(k - n_work)];
     const int i = bj.joint->index;
-    const double q = u[i];
-    const int d = bj.components && bj.components->bidirectional() ? dir[static_cast<size_t>(i)] : 0;
-    JointCache::Entry& e = cache.joint[static_cast<size_t>(k)];
-    if (!(e.q == q && e.dir == d)) {
-      e.clamped = 0;
-      joint_error(bj, q, d, e.R, e.delta_mm, e.clamped);
-      e.q = q;
-      e.dir = d;
-    }
-    clamped += e.clamped;
+    joint_error(bj, u[i], dir[static_cast<size_t>(i)], R_e[static_cast<size_t>(k)],
+                delta_e[static_cast<size_t>(k)], clamped);
   }
   if (clamped) clamped_->fetch_add(clamped, std::memory_order_relaxed);
 
@@ -421,11 +414,11 @@ Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDire
   Eigen::Vector3d n = a;
   for (int k = n_tool - 1; k >= 0; --k) {
     const BoundJoint& bj = tool_[static_cast<size_t>(k)];
-    const JointCache::Entry& e = cache.joint[static_cast<size_t>(n_work + k)];
+    const size_t e = static_cast<size_t>(n_work + k);
     const Eigen::Vector3d motion = u[bj.joint->index] * bj.joint->direction_parent;
     n += motion;
-    a = rotated(e.R, a);  // Trans(q d) E(q)
-    a += e.delta_mm;
+    a = rotated(R_e[e], a);  // Trans(q d) E(q)
+    a += delta_e[e];
     a += motion;
     n += bj.joint->offset_parent_mm;
     if (bj.has_location_rotation) a = rotated(bj.R_parent_loc, a);
@@ -433,15 +426,15 @@ Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDire
   }
   for (int k = 0; k < n_work; ++k) {
     const BoundJoint& bj = workpiece_[static_cast<size_t>(k)];
-    const JointCache::Entry& e = cache.joint[static_cast<size_t>(k)];
+    const size_t e = static_cast<size_t>(k);
     const Eigen::Vector3d motion = u[bj.joint->index] * bj.joint->direction_parent;
     n -= bj.joint->offset_parent_mm;
     a -= bj.t_parent_loc_mm;
     if (bj.has_location_rotation) a = rotated_back(bj.R_parent_loc, a);
     n -= motion;
-    a -= e.delta_mm;
+    a -= delta_e[e];
     a -= motion;
-    a = rotated_back(e.R, a);
+    a = rotated_back(R_e[e], a);
   }
   return (a - machine_.workpiece_origin_mm) - (n - machine_.workpiece_origin_mm);
 }

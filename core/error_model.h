@@ -31,7 +31,6 @@
 #include <atomic>
 #include <memory>
 #include <cstdint>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -111,31 +110,15 @@ class ErrorModel {
   /// Levers of every joint, workpiece chain then tool chain (base first).
   void levers(const AxisVector& u, std::vector<JointLever>& out) const;
 
-  /// The error transforms of every joint at the last point a
-  /// tip_error_linear() saw: consecutive points of an NC program often keep
-  /// an axis where it was (a raster row keeps Y, a 2.5-D level keeps Z), and
-  /// that joint's table lookup and rotation are then reused. Owned by the
-  /// caller: one cache per thread.
-  struct JointCache {
-    struct Entry {
-      double q = std::numeric_limits<double>::quiet_NaN();  ///< never equal: empty
-      int dir = 2;
-      std::uint64_t clamped = 0;
-      Eigen::Matrix3d R;
-      Eigen::Vector3d delta_mm;
-    };
-    std::array<Entry, 6> joint;
-  };
   /// Whether every joint is linear (a three-axis machine): tip_error_linear
   /// applies.
   bool all_joints_linear() const { return all_linear_; }
   /// exact(u, dir).dP_mm for a machine whose joints are all linear, bit for
   /// bit the same numbers (the same operations in the same order), without
-  /// the tool axis and with the joints' error transforms reused from *cache
-  /// where a joint stands where it stood. u: the axis values by AxisVector
-  /// index (mm). The post-processor's hot path (docs/post.md "Speed").
-  Eigen::Vector3d tip_error_linear(const double* u, const ApproachDirections& dir,
-                                   JointCache& cache) const;
+  /// the tool axis and the nominal lane's rotations. u: the axis values by
+  /// AxisVector index (mm). The three-axis post-processor's hot path
+  /// (docs/post.md "Speed").
+  Eigen::Vector3d tip_error_linear(const double* u, const ApproachDirections& dir) const;
 
   /// Number of evaluations that were clamped (OutsidePolicy::kClamp).
   std::uint64_t clamped_count() const { return clamped_->load(); }

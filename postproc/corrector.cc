@@ -180,7 +180,7 @@ double Corrector::chord_deviation_bound(const Eigen::Vector3d& c0, const Eigen::
 Eigen::Vector3d Corrector::error_at(const Eigen::Vector3d& p, const ApproachDirections& dir) const {
   if (zero_) return Eigen::Vector3d::Zero();
   const double u[3] = {p.x() + axis_shift_mm_.x(), p.y() + axis_shift_mm_.y(), p.z() + axis_shift_mm_.z()};
-  return M_u_tip_ * model_->tip_error_linear(u, dir, cache_);
+  return M_u_tip_ * model_->tip_error_linear(u, dir);
 }
 
 Eigen::Vector3d Corrector::error_with_play(const Eigen::Vector3d& p, const Eigen::Vector3d& h) const {

@@ -21,7 +21,6 @@
 
 namespace volmap::post {
 
-/// Not thread-safe (error_at reuses a cache): one Corrector per thread.
 class Corrector {
  public:
   /// `machine` must have exactly three linear axes and no rotary axis.
@@ -81,10 +80,6 @@ class Corrector {
 
  private:
   std::unique_ptr<ErrorModel> model_;
-  /// The joints' error transforms at the last point evaluated (reused where
-  /// an axis stands still). It makes a Corrector unfit for use from two
-  /// threads at once; each thread builds its own.
-  mutable ErrorModel::JointCache cache_;
   Eigen::Matrix3d M_u_tip_;       ///< d(machine coordinate)/d(tip, workpiece frame)
   Eigen::Vector3d axis_shift_mm_;  ///< tool length compensation of this tool
   bool zero_ = false;
