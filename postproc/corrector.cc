@@ -8,6 +8,9 @@
 
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <fmt/format.h>
+
+#include "maps/volumetric_table.h"
 
 namespace volmap::post {
 namespace {
@@ -90,6 +93,69 @@ Corrector::Corrector(const Machine& machine, const ErrorSet& errors,
   }
   model_ = std::make_unique<ErrorModel>(std::move(with_tool), errors, ModelOptions{Formulation::kIndependent, outside});
   compute_bounds(machine, errors);
+}
+
+Corrector::Corrector(const Machine& machine, const maps::VolumetricTable& table, OutsidePolicy outside)
+    : table_(&table), outside_(outside) {
+  if (machine.axis_count() != 3 || machine.has_rotary_axes())
+    throw std::invalid_argument("the three-axis post-processor needs a machine with axes X, Y, Z only");
+  if (table.axis_count() != 3 || !table.three_axis_correction())
+    throw std::invalid_argument("the table is not a three-axis table (volmap map of a machine with axes X, Y, Z)");
+  if (table.machine_name != machine.name)
+    throw std::invalid_argument(fmt::format("the table was made for machine \"{}\", not \"{}\"; "
+                                            "make it again with volmap map for this machine",
+                                            table.machine_name, machine.name));
+  for (int c = 0; c < 3; ++c)
+    if (table.channel(std::string("e") + "xyz"[c]) != c)
+      throw std::invalid_argument("the table's first channels are not ex ey ez");
+  const AxisVector zero = AxisVector::Zero(3);
+  const Eigen::Vector3d tip0 = nominal_forward(machine, zero).tip_mm;
+  Eigen::Matrix3d A;
+  for (int k = 0; k < 3; ++k) {
+    AxisVector e = zero;
+    e[k] = 1.0;
+    A.col(k) = nominal_forward(machine, e).tip_mm - tip0;
+  }
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
+  if (!lu.isInvertible()) throw std::invalid_argument("the machine's linear axes do not span space");
+  M_u_tip_ = lu.inverse();
+  axis_shift_mm_.setZero();  // the machine file's tool: machine coordinates are axis values
+  zero_ = true;
+  for (int layer = 0; layer < table.layer_count() && zero_; ++layer)
+    for (std::int64_t node = 0; node < table.node_count() && zero_; ++node) {
+      const double* v = table.at(layer, node);
+      zero_ = v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0;
+    }
+  for (int a : table.bidirectional_axes) bidirectional_[static_cast<size_t>(a)] = true;
+  for (int a = 0; a < 3; ++a) {
+    const maps::GridAxis& g = table.grid[static_cast<size_t>(a)];
+    box_lo_[a] = g.start;
+    box_hi_[a] = g.end;
+  }
+  lipschitz_ = curvature_ = std::numeric_limits<double>::infinity();
+}
+
+Eigen::Vector3d Corrector::table_error(const Eigen::Vector3d& u_mm, const ApproachDirections& dir) const {
+  const maps::VolumetricTable& t = *table_;
+  AxisVector u(3);
+  u << u_mm.x(), u_mm.y(), u_mm.z();
+  // The layers the directions allow: an axis with a direction fixes its
+  // bit; one without (not moved yet) takes both, averaged.
+  double v[64];
+  if (t.channel_count() > 64) throw std::invalid_argument("the table has too many channels");
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int used = 0;
+  for (int layer = 0; layer < t.layer_count(); ++layer) {
+    const ApproachDirections ld = t.layer_directions(layer);
+    bool fits = true;
+    for (int a : t.bidirectional_axes)
+      fits = fits && (dir[static_cast<size_t>(a)] == 0 || dir[static_cast<size_t>(a)] == ld[static_cast<size_t>(a)]);
+    if (!fits) continue;
+    maps::interpolate(t, u, layer, t.checked_with, outside_, v);
+    sum += Eigen::Vector3d(v[0], v[1], v[2]);
+    ++used;
+  }
+  return sum / static_cast<double>(used);
 }
 
 void Corrector::compute_bounds(const Machine& machine, const ErrorSet& errors) {
@@ -179,6 +245,7 @@ double Corrector::chord_deviation_bound(const Eigen::Vector3d& c0, const Eigen::
 
 Eigen::Vector3d Corrector::error_at(const Eigen::Vector3d& p, const ApproachDirections& dir) const {
   if (zero_) return Eigen::Vector3d::Zero();
+  if (table_) return M_u_tip_ * table_error(p + axis_shift_mm_, dir);
   const double u[3] = {p.x() + axis_shift_mm_.x(), p.y() + axis_shift_mm_.y(), p.z() + axis_shift_mm_.z()};
   return M_u_tip_ * model_->tip_error_linear(u, dir);
 }
@@ -198,6 +265,13 @@ Eigen::Vector3d Corrector::error_with_play(const Eigen::Vector3d& p, const Eigen
 
 double Corrector::play_width_mm(int a, const Eigen::Vector3d& p) const {
   if (!bidirectional_[static_cast<size_t>(a)]) return 0.0;
+  if (table_) {  // the difference of the two layers' tip errors along the axis
+    ApproachDirections plus{}, minus{};
+    plus[static_cast<size_t>(a)] = 1;
+    minus[static_cast<size_t>(a)] = -1;
+    const Eigen::Vector3d u = p + axis_shift_mm_;
+    return std::abs((M_u_tip_ * (table_error(u, plus) - table_error(u, minus)))[a]);
+  }
   const Machine& m = model_->machine();
   const AxisName name = m.axis_order[static_cast<size_t>(a)];
   const AxisErrors* ax = model_->errors().errors_of(name);

@@ -19,6 +19,10 @@
 
 #include "core/error_model.h"
 
+namespace volmap::maps {
+struct VolumetricTable;
+}
+
 namespace volmap::post {
 
 class Corrector {
@@ -26,6 +30,18 @@ class Corrector {
   /// `machine` must have exactly three linear axes and no rotary axis.
   Corrector(const Machine& machine, const ErrorSet& errors, double tool_length_mm,
             OutsidePolicy outside);
+  /// The same from a compensation table (volmap map) of a three-axis
+  /// machine: the error at a commanded point is the table's tool-tip error
+  /// (ex ey ez) interpolated as the table was checked (its checked_with), in
+  /// the direction layer of the approach directions (the mean of the layers
+  /// for an axis not yet moved, as the model takes the mean of its tables).
+  /// A table holds the errors of the machine file's tool only: the tool
+  /// length is that one. No bounds of the field are derived from a table
+  /// (lipschitz_bound() and curvature_bound() are infinite): straight pieces
+  /// are checked by samples. `table` must outlive the Corrector. Throws
+  /// std::invalid_argument for a table that is not a three-axis table of
+  /// this machine.
+  Corrector(const Machine& machine, const maps::VolumetricTable& table, OutsidePolicy outside);
 
   /// Tool-tip error at commanded machine position p (mm, machine frame),
   /// as a displacement in machine coordinates: actual = p + error_at(p).
@@ -79,7 +95,10 @@ class Corrector {
   bool zero() const { return zero_; }
 
  private:
-  std::unique_ptr<ErrorModel> model_;
+  std::unique_ptr<ErrorModel> model_;  ///< null for a table
+  const maps::VolumetricTable* table_ = nullptr;
+  OutsidePolicy outside_ = OutsidePolicy::kError;
+  Eigen::Vector3d table_error(const Eigen::Vector3d& u_mm, const ApproachDirections& dir) const;
   Eigen::Matrix3d M_u_tip_;       ///< d(machine coordinate)/d(tip, workpiece frame)
   Eigen::Vector3d axis_shift_mm_;  ///< tool length compensation of this tool
   bool zero_ = false;

@@ -17,6 +17,7 @@
 #include "core/input_error.h"
 #include "gcode/nc_path.h"
 #include "gcode/nc_writer.h"
+#include "maps/volumetric_table.h"
 #include "postproc/corrector.h"
 
 namespace volmap::post {
@@ -68,8 +69,9 @@ struct Piece {
 class ProgramPost {
  public:
   ProgramPost(const std::string& file, std::ostream& out, const Machine& machine,
-              const ErrorSet& errors, const nc::ProgramSetup& setup, const PostOptions& options)
-      : file_(file), out_(out), machine_(machine), errors_(errors), options_(options),
+              const ErrorSet& errors, const nc::ProgramSetup& setup, const PostOptions& options,
+              const maps::VolumetricTable* table = nullptr)
+      : file_(file), out_(out), machine_(machine), errors_(errors), table_(table), options_(options),
         interp_(setup, file) {}
 
   void line(std::string_view text, int number, bool newline);
@@ -85,8 +87,18 @@ class ProgramPost {
     const double L = interp_.state().tool_length_active ? interp_.state().tool_length_mm
                                                         : machine_.tool_length_mm;
     auto it = correctors_.find(L);
-    if (it == correctors_.end())
-      it = correctors_.emplace(L, std::make_unique<Corrector>(machine_, errors_, L, options_.outside)).first;
+    if (it == correctors_.end()) {
+      if (table_ && L != machine_.tool_length_mm)
+        // The table's errors are those of the machine file's tool; angular
+        // errors act on another tool through another lever.
+        throw InputError(file_, current_line_,
+                         fmt::format("the tool length here is {:g} mm, but a compensation table holds the errors "
+                                     "of the machine file's {:g} mm tool only; post with --errors instead",
+                                     L, machine_.tool_length_mm));
+      it = correctors_.emplace(L, table_ ? std::make_unique<Corrector>(machine_, *table_, options_.outside)
+                                         : std::make_unique<Corrector>(machine_, errors_, L, options_.outside))
+               .first;
+    }
     return *it->second;
   }
   // How close a commanded point is to the exact solution of x + e(x) = p:
@@ -151,6 +163,7 @@ class ProgramPost {
   std::ostream& out_;
   const Machine& machine_;
   const ErrorSet& errors_;
+  const maps::VolumetricTable* table_;  ///< instead of errors_ when set
   PostOptions options_;
   nc::Interpreter interp_;
   std::map<double, std::unique_ptr<Corrector>> correctors_;
@@ -557,12 +570,14 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
 
 }  // namespace
 
-PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
-                        const Machine& machine, const ErrorSet& errors,
-                        const nc::ProgramSetup& setup, const PostOptions& options) {
+namespace {
+PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& out,
+                    const Machine& machine, const ErrorSet& errors, const maps::VolumetricTable* table,
+                    const nc::ProgramSetup& setup, const PostOptions& options) {
   if (!(options.tolerance_mm > 0) || !std::isfinite(options.tolerance_mm))
     throw std::invalid_argument("--tolerance-um must be a positive finite number");
-  ProgramPost post(in_name, out, machine, errors, setup, options);
+  if (table) Corrector check(machine, *table, options.outside);  // a wrong table fails before any output
+  ProgramPost post(in_name, out, machine, errors, setup, options, table);
   // Lines out of a large buffer (getline's per-line work and copies avoided);
   // the buffer grows only to hold the longest line.
   std::vector<char> buf(1 << 16);
@@ -605,6 +620,21 @@ PostReport post_program(std::istream& in, const std::string& in_name, std::ostre
   }
   post.flush();
   return post.report();
+}
+
+}  // namespace
+
+PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
+                        const Machine& machine, const ErrorSet& errors,
+                        const nc::ProgramSetup& setup, const PostOptions& options) {
+  return run_post(in, in_name, out, machine, errors, nullptr, setup, options);
+}
+
+PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
+                        const Machine& machine, const maps::VolumetricTable& table,
+                        const nc::ProgramSetup& setup, const PostOptions& options) {
+  static const ErrorSet kNoErrors;
+  return run_post(in, in_name, out, machine, kNoErrors, &table, setup, options);
 }
 
 }  // namespace volmap::post

@@ -29,6 +29,10 @@
 #include "core/error_model.h"
 #include "gcode/nc_interpreter.h"
 
+namespace volmap::maps {
+struct VolumetricTable;
+}
+
 namespace volmap::post {
 
 struct PostOptions {
@@ -47,6 +51,14 @@ struct PostReport {
 
 PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
                         const Machine& machine, const ErrorSet& errors,
+                        const nc::ProgramSetup& setup, const PostOptions& options);
+/// The same from a three-axis compensation table (volmap map) instead of
+/// the errors: the table's interpolated tool-tip error stands for the model
+/// (Corrector's table form). Programs that change the tool length (G43 with
+/// another tool) are refused at that line: the table holds the errors of the
+/// machine file's tool only.
+PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
+                        const Machine& machine, const maps::VolumetricTable& table,
                         const nc::ProgramSetup& setup, const PostOptions& options);
 
 }  // namespace volmap::post

@@ -15,6 +15,7 @@
 #include "gcode/nc_block.h"
 #include "gcode/nc_interpreter.h"
 #include "gcode/nc_writer.h"
+#include "maps/table_builder.h"
 #include "postproc/corrector.h"
 #include "postproc/post_program.h"
 #include "postproc/verify.h"
@@ -216,6 +217,64 @@ TEST(Post, DeterministicOutput) {
   const std::string p = "G21\nG0 X0 Y0 Z5\nF200 G1 X100 Y50 Z0\nG3 X120 Y70 R20\n";
   EXPECT_EQ(post(p, hsu_errors(), offset_setup(100, 100, 100)),
             post(p, hsu_errors(), offset_setup(100, 100, 100)));
+}
+
+// post --table (cli.md): the table's interpolated tool-tip error stands for
+// the model. Checked against the model itself: the real machine simulated
+// from the errors runs the table-posted program within the tolerance plus
+// the table's own interpolation error (check_table against the model).
+TEST(PostTable, ATablePostedProgramRunsWithinToleranceOnTheModelMachine) {
+  const Machine m = hsu();
+  const ErrorSet e = hsu_errors();
+  const ErrorModel model(m, e);
+  maps::VolumetricTable table = maps::build_table(model, {10.0, 10.0, 10.0});
+  const double table_um = maps::check_table(model, table).max_dv_um;
+  ASSERT_LT(table_um, 0.5);  // the 10 mm grid holds the sample's smooth errors
+  const std::string program = read_file(test::source_path("samples/programs/pocket.ngc"));
+  const nc::ProgramSetup s = offset_setup(250, 200, 100);
+  std::istringstream in(program);
+  std::ostringstream out;
+  post::post_program(in, "pocket.ngc", out, m, table, s, post::PostOptions{});
+  std::istringstream a(program), b(out.str());
+  const post::VerifyResult r = post::verify_programs(a, "pocket.ngc", b, "out.ngc", m, e, s, {});
+  // Posting from the errors: within 1 um on the feed moves; the drill
+  // cycle's feed-in is corrected at the hole bottom only (docs/post.md), its
+  // deviation on the way down is the largest.
+  const post::VerifyResult direct = [&] {
+    std::istringstream n(program), c(post(program, e, s));
+    return post::verify_programs(n, "pocket.ngc", c, "direct.ngc", m, e, s, {});
+  }();
+  EXPECT_GT(r.before.max_um, 10.0);
+  // From the table: the same to within the table's error and the rounding
+  // to 4 decimals (0.05 um a coordinate).
+  EXPECT_LE(r.after.max_um, direct.after.max_um + table_um + 0.09) << "table error " << table_um << " um";
+  EXPECT_NEAR(r.after.rms_um, direct.after.rms_um, table_um + 0.05);
+}
+
+TEST(PostTable, AnotherToolOrAnotherMachineIsRefused) {
+  const Machine m = hsu();
+  const ErrorModel model(m, hsu_errors());
+  const maps::VolumetricTable table = maps::build_table(model, {50.0, 50.0, 50.0});
+  nc::ProgramSetup s = offset_setup(250, 200, 100);
+  s.tool_length_mm[1] = m.tool_length_mm;        // the machine file's tool: fine
+  s.tool_length_mm[2] = m.tool_length_mm + 30.0;  // another one: its errors are not in the table
+  auto run = [&](const std::string& program, const Machine& machine) {
+    std::istringstream in(program);
+    std::ostringstream out;
+    post::post_program(in, "p.ngc", out, machine, table, s, post::PostOptions{});
+    return out.str();
+  };
+  EXPECT_NO_THROW(run("G21 G90\nG0 X0 Y0 Z0\nG43 H1\nG1 X10 F100\n", m));
+  try {
+    run("G21 G90\nG0 X0 Y0 Z0\nG43 H2\nG1 X10 F100\n", m);
+    FAIL() << "a 130 mm tool was posted from a table of the 100 mm tool";
+  } catch (const InputError& err) {
+    EXPECT_EQ(err.line(), 3);  // the G43 line
+    EXPECT_NE(std::string(err.what()).find("post with --errors"), std::string::npos) << err.what();
+  }
+  Machine other = m;
+  other.name = "another-machine";
+  EXPECT_THROW(run("G0 X0 Y0 Z0\n", other), std::invalid_argument);
 }
 
 }  // namespace

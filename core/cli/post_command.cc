@@ -4,6 +4,8 @@
 #include <iostream>
 #include <memory>
 
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "core/atomic_file.h"
@@ -15,6 +17,7 @@
 #include "core/input_error.h"
 #include "core/machine_json.h"
 #include "maps/table_file.h"
+#include "postproc/corrector.h"
 #include "postproc/five_axis_post.h"
 #include "postproc/post_program.h"
 
@@ -77,7 +80,7 @@ Runner register_post(CLI::App& app) {
   auto* errors = sub->add_option("--errors", o->errors, "Errors file: errors.md CSV, ISG CSV or Etalon exchange format");
   sub->add_option("--errors-format", o->errors_format, "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv (Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
       ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
-  auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map) instead of --errors; five-axis machines only");
+  auto* table = sub->add_option("--table", o->table, "Compensation table (volmap map) instead of --errors (three-axis: the machine file's tool only)");
   errors->excludes(table);
   sub->add_option("--tolerance-um", o->tolerance_um, "Bound on the deviation of the actual path from the nominal one, also between points (default 1)")
       ->check(CLI::PositiveNumber);
@@ -94,9 +97,19 @@ Runner register_post(CLI::App& app) {
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
     if (o->five.applies(m)) return run_five_axis(*o, o->five.place_part(m));
-    if (o->errors.empty())
-      throw std::invalid_argument("post needs --errors (table input is supported for five-axis machines only)");
-    const ErrorSet e = load_errors(o->errors, parse_errors_format(o->errors_format));
+    if (o->errors.empty() && o->table.empty()) throw UsageError("post needs --errors or --table");
+    std::optional<maps::VolumetricTable> table;
+    ErrorSet e;
+    if (!o->table.empty()) {
+      table = maps::load_table(o->table);
+      try {
+        post::Corrector check(m, *table, OutsidePolicy::kError);
+      } catch (const std::invalid_argument& bad) {
+        throw InputError(o->table, 0, bad.what());
+      }
+    } else {
+      e = load_errors(o->errors, parse_errors_format(o->errors_format));
+    }
     const nc::ProgramSetup setup = o->placement.load(m);
     post::PostOptions opt;
     opt.tolerance_mm = o->tolerance_um * 1e-3;
@@ -111,13 +124,14 @@ Runner register_post(CLI::App& app) {
       in = &file_in;
       in_name = o->in;
     }
-    std::vector<std::string> inputs{o->in, o->machine, o->errors};
+    std::vector<std::string> inputs{o->in, o->machine, table ? o->table : o->errors};
     if (!o->placement.var_file.empty()) inputs.push_back(o->placement.var_file);
     if (!o->placement.tool_table.empty()) inputs.push_back(o->placement.tool_table);
     // "-": spooled to a temporary file and copied out when complete
     // (core/atomic_file.h): constant memory, and nothing on failure.
     AtomicOutput out(o->out, inputs);
-    const post::PostReport r = post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
+    const post::PostReport r = table ? post::post_program(*in, in_name, out.stream(), m, *table, setup, opt)
+                                     : post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
     out.commit();
     if (isatty(2))
       std::cerr << fmt::format("{} lines, {} changed, {} added, max correction {:.2f} um\n", r.lines,
