@@ -69,10 +69,6 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       fail(file, line, i,
            "# parameters are not supported: the post-processor needs literal numbers; "
            "expand parameters in CAM (or with LinuxCNC's interpreter) first");
-    if (c == '@' || c == '^')
-      fail(file, line, i,
-           "polar coordinates (@ radius, ^ angle; a LinuxCNC extension) are not supported; "
-           "output X and Y from CAM");
     if (c == '[')
       fail(file, line, i,
            "[ ] expressions are not supported; output literal numbers from CAM");
@@ -81,7 +77,9 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       fail(file, line, i,
            "O-word control flow (subroutines, loops, conditionals) is not supported; "
            "expand it in CAM to a flat program");
-    if (letter < 'A' || letter > 'Z')
+    // Word letters: A-Z, and LinuxCNC's polar coordinates @ (radius) and ^
+    // (angle, degrees), which the interpreter reads as X and Y.
+    if ((letter < 'A' || letter > 'Z') && letter != '@' && letter != '^')
       fail(file, line, i, std::string("unexpected character '") + c + "'; not a G-code word");
     Word w;
     w.letter = letter;

@@ -17,7 +17,7 @@
 namespace volmap::nc {
 
 struct Word {
-  char letter = 0;       ///< upper case
+  char letter = 0;       ///< upper case; '@' and '^' for polar radius and angle
   double value = 0.0;    ///< as written (program units)
   int code10 = -1;       ///< G/M: value x 10 when it has at most one decimal, else -1
   std::uint32_t begin = 0, end = 0;  ///< byte span [begin, end) in Block::text

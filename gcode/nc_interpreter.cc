@@ -16,6 +16,8 @@ namespace {
 // helix would need more pieces than memory holds).
 constexpr double kMaxToolNumber = 99999;  // T, H and tool table numbers
 constexpr double kMaxArcTurns = 1000;     // P of G2/G3
+constexpr double kMaxCycleRepeats = 10000;  // L of canned cycles
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 // Modal groups of G codes (code x 10), RS274NGC / LinuxCNC numbering.
 enum GGroup { kNonModal = 0, kMotion = 1, kPlane = 2, kDistance = 3, kArcDistance = 4,
@@ -128,6 +130,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   std::array<const Word*, kGroupCount> g{};
   std::array<const Word*, kMGroupCount> m{};
   std::array<const Word*, 26> letter{};
+  const Word* polar_radius = nullptr;  // @: LinuxCNC polar coordinates in the XY plane
+  const Word* polar_angle = nullptr;   // ^: degrees, counter-clockwise from +X
   unsigned g_mask = 0, m_mask = 0;
   for (const Word& w : b.words) {
     if (w.letter == 'G') {
@@ -154,6 +158,12 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       m[static_cast<size_t>(grp)] = &w;
       continue;
     }
+    if (w.letter == '@' || w.letter == '^') {
+      const Word*& slot = w.letter == '@' ? polar_radius : polar_angle;
+      if (slot) fail(b, &w, fmt::format("word {} appears twice in one block", w.letter));
+      slot = &w;
+      continue;
+    }
     const char L = w.letter;
     if (L == 'A' || L == 'B' || L == 'C' || L == 'U' || L == 'V' || L == 'W')
       fail(b, &w, fmt::format("axis word {} is not supported by the three-axis post-processor; "
@@ -165,7 +175,11 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     letter[static_cast<size_t>(L - 'A')] = &w;
   }
   auto word = [&](char L) { return letter[static_cast<size_t>(L - 'A')]; };
-  const bool any_axis = word('X') || word('Y') || word('Z');
+  const bool polar = polar_radius || polar_angle;
+  const bool any_axis = word('X') || word('Y') || word('Z') || polar;
+  if (polar && (word('X') || word('Y')))
+    fail(b, word('X') ? word('X') : word('Y'),
+         "X or Y with polar coordinates (@ ^) in one block; use one form or the other");
 
   // Step 3 and 4: execute in RS274NGC order.
   if (g[kFeedMode]) s_.feed_mode = g[kFeedMode]->code10;
@@ -206,7 +220,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       s_.tool_length_active = true;
       s_.tool_length_mm = z->value * s_.unit_mm;
       consumed_axes = true;
-      if (word('X') || word('Y')) fail(b, word('X') ? word('X') : word('Y'), "G43.1 takes only Z here");
+      if (word('X') || word('Y') || polar)
+        fail(b, word('X') ? word('X') : word('Y') ? word('Y') : polar_radius ? polar_radius : polar_angle,
+             "G43.1 takes only Z here");
     }
   }
   if (g[kCoordSystem]) {
@@ -220,11 +236,13 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   const bool g53 = g[kNonModal] && g[kNonModal]->code10 == 530;
   effect.g53 = g53;
   if (g53 && !s_.absolute) fail(b, g[kNonModal], "G53 needs absolute mode (G90)");
+  if (g53 && polar) fail(b, polar_radius ? polar_radius : polar_angle, "polar coordinates (@ ^) with G53; use X and Y");
 
   if (g[kMotion]) {
     s_.motion = g[kMotion]->code10;
     effect.motion_code = s_.motion;
   }
+  if (!is_cycle(s_.motion)) s_.cycle_il_known = false;
   // A G2/G3 with centre words but no axis words is a full circle (LinuxCNC).
   static constexpr char kOffsetLetters[3][2] = {{'I', 'J'}, {'K', 'I'}, {'J', 'K'}};
   const int arc_plane = g[kPlane] ? (g[kPlane]->code10 - 170) / 10 : s_.plane;
@@ -256,6 +274,45 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         target[a] = w->value * s_.unit_mm + (g53 ? 0.0 : wo[a]);
       else
         target[a] = s_.position_mm[a] + w->value * s_.unit_mm;
+    }
+    // Program coordinates (XY plane, program units) of where the tool
+    // stands: polar coordinates and canned-cycle increments start there.
+    const double unit = s_.unit_mm;
+    const double at_x = (s_.position_mm.x() - wo.x()) / unit, at_y = (s_.position_mm.y() - wo.y()) / unit;
+    const bool xy_known = s_.axis_known[0] && s_.axis_known[1];
+    if (polar && !is_cycle(s_.motion)) {
+      // LinuxCNC (interp_find.cc, find_ends). G90: @ and ^ from the program
+      // origin; a missing one is the current point's. G91: @ adds to the
+      // current point's radius, then ^ to its angle.
+      const Word* w = polar_radius ? polar_radius : polar_angle;
+      const bool needs_current = !s_.absolute || !polar_radius || !polar_angle;
+      if (needs_current && !xy_known)
+        fail(b, w, "polar coordinates from an unknown position: command X and Y first (or give --initial-position)");
+      double px = at_x, py = at_y;
+      if (s_.absolute) {
+        if (polar_radius && !polar_angle && px == 0 && py == 0)
+          fail(b, w, "polar radius without an angle at the origin: add a ^ word");
+        const double radius = polar_radius ? polar_radius->value : std::hypot(py, px);
+        const double theta = polar_angle ? polar_angle->value * kDegToRad : std::atan2(py, px);
+        px = radius * std::cos(theta);
+        py = radius * std::sin(theta);
+      } else {
+        if (px == 0 && py == 0)
+          fail(b, w, "incremental polar coordinates (G91) at the program origin are indeterminate; move off it first");
+        if (polar_radius) {
+          const double theta = std::atan2(py, px), radius = std::hypot(py, px) + polar_radius->value;
+          px = radius * std::cos(theta);
+          py = radius * std::sin(theta);
+        }
+        if (polar_angle) {
+          const double theta = std::atan2(py, px) + polar_angle->value * kDegToRad, radius = std::hypot(py, px);
+          px = radius * std::cos(theta);
+          py = radius * std::sin(theta);
+        }
+      }
+      target.x() = px * unit + wo.x();
+      target.y() = py * unit + wo.y();
+      given[0] = given[1] = s_.absolute;  // an absolute polar point fixes both axes
     }
     Motion& mo = effect.motion;
     mo.start_mm = s_.position_mm;
@@ -330,10 +387,12 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       }
       (void)kN;
     } else if (is_cycle(mode)) {
-      if (!s_.absolute)
-        fail(b, nullptr, "canned cycles in incremental mode (G91) are not supported; use G90");
-      if (const Word* l = word('L'); l && l->value != 1)
-        fail(b, l, "canned cycle repeats (L) are not supported; write each hole");
+      if (s_.plane != 0)
+        fail(b, nullptr, "canned cycles in the G18 or G19 plane are not supported; use G17");
+      const Word* l = word('L');
+      if (l && (l->value < 1 || l->value != std::floor(l->value) || l->value > kMaxCycleRepeats))
+        fail(b, l, fmt::format("L (repeats) must be a positive integer up to {}", kMaxCycleRepeats));
+      const int repeats = l ? static_cast<int>(l->value) : 1;
       if (const Word* z = word('Z')) s_.cycle_z = z->value;
       else if (g[kMotion]) fail(b, g[kMotion], "canned cycle needs a Z word (hole bottom)");
       if (const Word* r = word('R')) s_.cycle_r = r->value;
@@ -344,14 +403,65 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
       if (s_.feed <= 0.0) fail(b, nullptr, "canned cycle with no feed rate; add an F word");
       mo.kind = MotionKind::kCycle;
-      const double r_mm = s_.cycle_r * s_.unit_mm + wo[2];
-      const double bottom_mm = s_.cycle_z * s_.unit_mm + wo[2];
+      // LinuxCNC (interp_cycles.cc, convert_cycle_xy). G90: R and Z are
+      // levels, the hole is at X Y (or @ ^ from the origin). G91: R is
+      // above the initial level (State::cycle_il_mm), Z below R, and X Y (@ ^) are
+      // increments applied once per repeat (L), so L holes go in a row (or
+      // round a circle); under G90 the L repeats drill the same hole.
+      if (!s_.cycle_il_known) {
+        s_.cycle_il_known = true;
+        s_.cycle_il_mm = s_.position_mm.z();
+      }
+      const double initial = s_.cycle_il_mm;
+      const double r_mm = s_.absolute ? s_.cycle_r * unit + wo[2] : initial + s_.cycle_r * unit;
+      const double bottom_mm = s_.absolute ? s_.cycle_z * unit + wo[2] : r_mm + s_.cycle_z * unit;
       if (bottom_mm > r_mm) fail(b, nullptr, "canned cycle with the hole bottom (Z) above the R plane");
-      mo.end_mm = Eigen::Vector3d(target.x(), target.y(), bottom_mm);
+      double aa = at_x, bb = at_y;
+      double aa_step = 0, bb_step = 0, radius_step = 0, angle_step_rad = 0;
+      if (s_.absolute) {
+        if (polar) {
+          const double radius = polar_radius ? polar_radius->value : std::hypot(bb, aa);
+          const double theta = polar_angle ? polar_angle->value * kDegToRad : std::atan2(bb, aa);
+          aa = radius * std::cos(theta);
+          bb = radius * std::sin(theta);
+        } else {
+          aa = (target.x() - wo.x()) / unit;
+          bb = (target.y() - wo.y()) / unit;
+        }
+      } else {
+        if (const Word* x = word('X')) aa_step = x->value;
+        if (const Word* y = word('Y')) bb_step = y->value;
+        if (polar_radius) radius_step = polar_radius->value;
+        if (polar_angle) angle_step_rad = polar_angle->value * kDegToRad;
+      }
+      if (polar && !xy_known)
+        fail(b, polar_radius ? polar_radius : polar_angle,
+             "polar coordinates from an unknown position: command X and Y first (or give --initial-position)");
       mo.r_mm = r_mm;
-      const double initial = s_.position_mm.z();
       mo.clear_mm = s_.g98 ? std::max(initial, r_mm) : r_mm;
-      target = Eigen::Vector3d(target.x(), target.y(), mo.clear_mm);
+      Eigen::Vector3d at = s_.position_mm;
+      for (int k = 0; k < repeats; ++k) {
+        aa += aa_step;
+        bb += bb_step;
+        if ((radius_step != 0 || angle_step_rad != 0) && aa == 0 && bb == 0)
+          fail(b, polar_radius ? polar_radius : polar_angle,
+               "incremental polar coordinates (G91) at the program origin are indeterminate; move off it first");
+        if (radius_step != 0) {
+          const double theta = std::atan2(bb, aa), radius = std::hypot(bb, aa) + radius_step;
+          aa = radius * std::cos(theta);
+          bb = radius * std::sin(theta);
+        }
+        if (angle_step_rad != 0) {
+          const double theta = std::atan2(bb, aa) + angle_step_rad, radius = std::hypot(bb, aa);
+          aa = radius * std::cos(theta);
+          bb = radius * std::sin(theta);
+        }
+        Motion& hole = k == 0 ? mo : effect.more_holes.emplace_back(mo);
+        hole.start_mm = at;
+        hole.end_mm = Eigen::Vector3d(aa * unit + wo.x(), bb * unit + wo.y(), bottom_mm);
+        at = Eigen::Vector3d(hole.end_mm.x(), hole.end_mm.y(), mo.clear_mm);
+      }
+      target = at;
     } else {
       fail(b, nullptr, "axis words without a motion mode; add G0 or G1");
     }

@@ -7,8 +7,9 @@
 //
 // Supported: G0 G1 G2 G3 (centre I J K and R forms, full circles, helices,
 // P turns), G17 G18 G19, G20 G21, G90 G91, G90.1 G91.1, G53, G54-G59.3,
-// G43 H / G43.1 / G49, G80-G89 (G73 G81 G82 G83 G85 G86 G89 in G90 with
-// G98/G99), G93 G94 G95, G4, G40, G61 G61.1 G64, G96 G97, F S T, M0-M9,
+// G43 H / G43.1 / G49, G80-G89 (G73 G81 G82 G83 G85 G86 G89 in G17, G90 or
+// G91, with G98/G99 and L repeats), LinuxCNC's polar coordinates (@ ^),
+// G93 G94 G95, G4, G40, G61 G61.1 G64, G96 G97, F S T, M0-M9,
 // M30, M48 M49 M60 and other M codes (passed through), N numbers, block
 // delete (executed), comments. Everything else is refused with a reason:
 // volmap never passes through a construct it did not understand.
@@ -81,6 +82,12 @@ struct State {
   int selected_tool = 0;       ///< last T word
   bool g98 = true;             ///< canned cycle return to the initial level
   double cycle_r = 0.0, cycle_z = 0.0;  ///< modal R and Z of canned cycles (program units)
+  /// LinuxCNC's initial level of a run of canned-cycle blocks: the Z (mm,
+  /// machine) where the first of them started; G98 returns to it (or to R
+  /// when R is higher) and G91's R counts from it. A motion that is not a
+  /// cycle ends the run.
+  bool cycle_il_known = false;
+  double cycle_il_mm = 0.0;
   double feed = 0.0;
   int feed_mode = 940;         ///< 930, 940, 950
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  ///< machine coordinates
@@ -97,6 +104,10 @@ struct BlockEffect {
   bool g53 = false;
   bool stop_code = false;  ///< M0 M1 M2 M30 M60 in the block
   int motion_code = -1;    ///< motion G code written in this block, x10, or -1
+  /// A canned cycle repeated (L > 1): the holes after the first, in order
+  /// (`motion` is the first). Each starts where the one before it left the
+  /// tool: over its hole at the clearance level.
+  std::vector<Motion> more_holes;
 };
 
 class Interpreter {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <string_view>
 #include <istream>
@@ -139,6 +140,21 @@ class ProgramPost {
     return cmd;
   }
   const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
+  void cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower, bool spaces,
+                   int dec);
+  /// The program value the controller reads from a number written with
+  /// `dec` decimals (what format_number writes, read back).
+  /// The controller's initial level of the run of cycle blocks (LinuxCNC's
+  /// cycle_il, State::cycle_il_mm): the Z it stood at, as commanded, when
+  /// the run began.
+  void enter_cycle_run() {
+    if (ctrl_il_known_) return;
+    ctrl_il_known_ = true;
+    ctrl_il_mm_ = emitted_mm_.z();
+  }
+  bool ctrl_il_known_ = false;
+  double ctrl_il_mm_ = 0.0;
+  static double written(double value, int dec) { return std::strtod(nc::format_number(value, dec).c_str(), nullptr); }
   // Program value of axis a for commanded machine position v.
   double program_value(int a, double v_mm, bool g53) const {
     const nc::State& s = interp_.state();
@@ -342,6 +358,79 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
   return done;
 }
 
+// A canned cycle that the controller would repeat (L > 1), that is
+// incremental (G91) or placed by polar words: one block per hole, each with
+// its own correction, the first in place of the block (its other words kept,
+// L and the polar words dropped), the others after it as modal repeats
+// (`X.. Y.. Z.. R..` and the block's P and Q). Under G91 every number is
+// taken from where the controller stands when it reads it: X Y from over
+// the hole before, R from that level (LinuxCNC: R above the level the tool
+// is at, Z below R), so the rounding of each number is carried into the
+// next instead of adding up.
+void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
+                              bool spaces, int dec) {
+  const nc::State& s = interp_.state();
+  const double unit = s.unit_mm;
+  const Vector3d& wo = interp_.work_offset();
+  std::string extra;  // the block's P and Q words, for every repeat
+  for (const nc::Word& w : b.words)
+    if (w.letter == 'P' || w.letter == 'Q') {
+      if (spaces) extra += ' ';
+      extra += b.text.substr(w.begin, w.end - w.begin);
+    }
+  enter_cycle_run();
+  const size_t holes = 1 + fx.more_holes.size();
+  for (size_t k = 0; k < holes; ++k) {
+    const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[k - 1];
+    // The traverse over the hole sets X and Y's approach; the feed goes down.
+    ApproachDirections d = directions_of(emitted_mm_, h.end_mm, last_dir_);
+    d[2] = -1;
+    last_dir_ = d;
+    const Vector3d cmd = command(c, h.end_mm, d);
+    const Vector3d r_cmd = command(c, Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm), d);
+    double x, y, r, z;  // the words
+    Vector3d at;        // where the controller takes them to: over the hole, at R
+    if (s.absolute) {
+      x = written((cmd.x() - wo.x()) / unit, dec);
+      y = written((cmd.y() - wo.y()) / unit, dec);
+      r = written((r_cmd.z() - wo.z()) / unit, dec);
+      z = written((cmd.z() - wo.z()) / unit, dec);
+      at = Vector3d(x * unit + wo.x(), y * unit + wo.y(), r * unit + wo.z());
+    } else {
+      x = written((cmd.x() - emitted_mm_.x()) / unit, dec);
+      y = written((cmd.y() - emitted_mm_.y()) / unit, dec);
+      r = written((r_cmd.z() - ctrl_il_mm_) / unit, dec);
+      at = Vector3d(emitted_mm_.x() + x * unit, emitted_mm_.y() + y * unit, ctrl_il_mm_ + r * unit);
+      z = written((cmd.z() - at.z()) / unit, dec);
+    }
+    std::string words;
+    const char* letters = lower ? "xyzr" : "XYZR";
+    const double values[4] = {x, y, z, r};
+    for (int i = 0; i < 4; ++i) {
+      if (i > 0 && spaces) words += ' ';
+      words += letters[i];
+      words += nc::format_number(values[i], dec);
+    }
+    if (k == 0) {
+      nc::BlockEdit edit;
+      for (size_t i = 0; i < b.words.size(); ++i) {
+        const char L = b.words[i].letter;
+        if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == '@' || L == '^')
+          edit.remove.push_back(static_cast<int>(i));
+      }
+      edit.insert = words;
+      emit(nc::apply_edit(b, edit));
+      ++report_.lines_changed;
+    } else {
+      emit(words + extra);
+      ++report_.lines_added;
+    }
+    // After the hole: G99 at R, G98 at the initial level or R if higher.
+    emitted_mm_ = Vector3d(at.x(), at.y(), s.g98 ? std::max(ctrl_il_mm_, at.z()) : at.z());
+  }
+  emitted_known_ = true;
+}
+
 void ProgramPost::line(std::string_view raw, int number, bool newline) {
   current_line_ = number;
   ++report_.lines;
@@ -357,6 +446,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   const bool known_before = interp_.state().position_known;
   nc::BlockEffect fx;
   interp_.execute(b, fx);
+  if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();
   // The line goes out as written: the controller then stands where its
   // words say, the axes it does not name where we left them.
@@ -416,6 +506,11 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   }
   if (!emitted_known_) emitted_mm_ = m.start_mm;
 
+  if (m.kind == nc::MotionKind::kCycle &&
+      (!fx.more_holes.empty() || !interp_.state().absolute || b.find('@') || b.find('^'))) {
+    cycle_holes(b, fx, c, lower, spaces, dec);
+    return;
+  }
   if (m.kind == nc::MotionKind::kRapid || m.kind == nc::MotionKind::kCycle) {
     const ApproachDirections d = m.kind == nc::MotionKind::kCycle
                                      ? ApproachDirections{last_dir_[0], last_dir_[1], -1, 0, 0, 0}
@@ -453,7 +548,9 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
         insert += b.text.substr(w.begin, w.end - w.begin);
       }
     }
+    double cycle_clear_mm = m.clear_mm;
     if (m.kind == nc::MotionKind::kCycle) {
+      enter_cycle_run();
       // The R plane, corrected where the tool reaches it, stated every block
       // (the correction differs from hole to hole).
       const Vector3d r_nominal(m.end_mm.x(), m.end_mm.y(), m.r_mm);
@@ -473,6 +570,11 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
         insert += nc::format_number(r_new, dec);
         changed = true;
       }
+      // Where the controller ends: G99 at the R it reads, G98 at the initial
+      // level or that R if higher.
+      const double r_read_mm =
+          changed ? written(r_new, dec) * s.unit_mm + interp_.work_offset()[2] : m.r_mm;
+      cycle_clear_mm = s.g98 ? std::max(ctrl_il_mm_, r_read_mm) : r_read_mm;
     }
     if (!changed) {
       unchanged();
@@ -482,7 +584,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     emit(nc::apply_edit(b, edit));
     ++report_.lines_changed;
     if (m.kind == nc::MotionKind::kCycle)
-      emitted_mm_ = Vector3d(cmd.x(), cmd.y(), m.clear_mm);  // returns to the nominal clearance
+      emitted_mm_ = Vector3d(cmd.x(), cmd.y(), cycle_clear_mm);
     else
       emitted_mm_ = cmd;
     emitted_known_ = true;

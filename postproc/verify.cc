@@ -49,19 +49,23 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
       continue;
     }
     if (m.kind == nc::MotionKind::kCycle) {
-      // Rapid over the hole, down to R, then the feed to the bottom.
-      nc::Motion over = m;
-      over.kind = nc::MotionKind::kRapid;
-      over.end_mm = Vector3d(m.end_mm.x(), m.end_mm.y(), m.r_mm);
-      out.push_back({over, L, number, false});
-      m.start_mm = over.end_mm;
-      m.kind = nc::MotionKind::kLinear;
-      out.push_back({m, L, number, true});
-      nc::Motion back = m;
-      back.kind = nc::MotionKind::kRapid;
-      back.start_mm = m.end_mm;
-      back.end_mm = Vector3d(m.end_mm.x(), m.end_mm.y(), m.clear_mm);
-      out.push_back({back, L, number, false});
+      // Every hole (L repeats): rapid over it, down to R, then the feed to
+      // the bottom and back to the clearance level.
+      for (size_t k = 0; k <= fx.more_holes.size(); ++k) {
+        nc::Motion h = k == 0 ? m : fx.more_holes[k - 1];
+        nc::Motion over = h;
+        over.kind = nc::MotionKind::kRapid;
+        over.end_mm = Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm);
+        out.push_back({over, L, number, false});
+        h.start_mm = over.end_mm;
+        h.kind = nc::MotionKind::kLinear;
+        out.push_back({h, L, number, true});
+        nc::Motion back = h;
+        back.kind = nc::MotionKind::kRapid;
+        back.start_mm = h.end_mm;
+        back.end_mm = Vector3d(h.end_mm.x(), h.end_mm.y(), h.clear_mm);
+        out.push_back({back, L, number, false});
+      }
       continue;
     }
     out.push_back({m, L, number, true});

@@ -66,7 +66,7 @@ TEST(NcBlock, KeepsSpansAndScalesCodes) {
 TEST(NcBlock, RefusesWhatItDoesNotRead) {
   const std::pair<const char*, const char*> cases[] = {
       {"o100 sub", "O-word"},       {"G1 X#1", "# parameters"},  {"G1 X[1+2]", "expressions"},
-      {"G1 X", "has no number"},        {"G1 Y - ", "has no number"},   {"G1 (open", "not closed"},   {"G0 @1 ^30", "polar"},
+      {"G1 X", "has no number"},        {"G1 Y - ", "has no number"},   {"G1 (open", "not closed"},   {"G0 X1 $2", "unexpected character"},
   };
   for (const auto& [text, words] : cases) {
     try {
@@ -93,7 +93,10 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
       {"G0 X0 Y0 Z0\nF100 G2 X10 Y0 I3 J0", "radius to end of arc"},
       {"F100 G1 X5", "unknown position"},
       {"G0 X0 Y0 Z0\nG43 H7", "tool table"},
-      {"G0 X0 Y0 Z0\nG91 F10 G81 Z-1 R1", "incremental"},
+      {"G0 X0 Y0 Z0\nG91 G1 @5 F10", "indeterminate"},
+      {"G0 X0 Y0 Z0\nG1 X1 @2 F10", "polar"},
+      {"G0 X1 Y1 Z0\nF10 G81 X2 Y2 Z-1 R1 L2.5", "L (repeats)"},
+      {"G0 X1 Y1 Z0\nF10 G81 X2 Y2 Z2 R1", "above the R plane"},
       {"G91 F10 G1 X1 Y1 Z1", "unknown position"},
   };
   for (const auto& [text, words] : cases) {
@@ -105,6 +108,55 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
       EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << text << " -> " << e.what();
     }
   }
+}
+
+// LinuxCNC's polar coordinates (interp_find.cc, find_ends), by hand:
+// G90 @10 ^30 is (10 cos 30, 10 sin 30) = (8.660254, 5); a lone ^90 keeps
+// the radius 10: (0, 10); G91 @5 adds to the radius: (0, 15); G91 ^-90
+// turns by -90 degrees: (15, 0). Work offset (100, 100, 100) mm.
+TEST(NcInterpreter, PolarCoordinatesAsLinuxCncReadsThem) {
+  nc::Interpreter in(offset_setup(100, 100, 100), "p.ngc");
+  nc::BlockEffect fx;
+  const char* lines[] = {"G21 G90 G17", "G0 X0 Y0 Z0", "G1 @10 ^30 F100", "G1 ^90", "G91 G1 @5", "G1 ^-90"};
+  const Eigen::Vector3d want[] = {{0, 0, 0}, {100, 100, 100}, {108.660254037844386, 105, 100},
+                                  {100, 110, 100}, {100, 115, 100}, {115, 100, 100}};
+  for (int k = 0; k < 6; ++k) {
+    in.execute(nc::lex_block(lines[k], k + 1, "p.ngc"), fx);
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(in.state().position_mm[a], want[k][a], 1e-12) << lines[k];
+  }
+}
+
+// hole-circle.ngc's cycle, by hand: from (1.5, 0, 0) in, G91 G81 R.1 Z-.5
+// ^60 L6: R is 0.1 in above the start level, the bottom 0.5 in below R
+// (-0.4 in), the tool returns to R (G98 with the start below R); each
+// repeat turns the hole 60 degrees about the origin on the 1.5 in circle.
+TEST(NcInterpreter, IncrementalCannedCycleRepeatsRoundACircle) {
+  nc::Interpreter in(offset_setup(100, 100, 100), "p.ngc");
+  nc::BlockEffect fx;
+  for (const char* l : {"G20 G17 G90", "G0 X1.5 Y0 Z0"}) in.execute(nc::lex_block(l, 1, "p.ngc"), fx);
+  in.execute(nc::lex_block("G91 G81 R.1 Z-.5 ^60 L6 F10", 3, "p.ngc"), fx);
+  ASSERT_TRUE(fx.has_motion);
+  ASSERT_EQ(fx.more_holes.size(), 5u);
+  const double r_in = 1.5, deg = M_PI / 180;
+  for (int k = 0; k < 6; ++k) {
+    const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[static_cast<size_t>(k - 1)];
+    EXPECT_EQ(h.kind, nc::MotionKind::kCycle);
+    EXPECT_NEAR(h.end_mm.x(), 100 + 25.4 * r_in * std::cos(60 * (k + 1) * deg), 1e-9) << k;
+    EXPECT_NEAR(h.end_mm.y(), 100 + 25.4 * r_in * std::sin(60 * (k + 1) * deg), 1e-9) << k;
+    EXPECT_NEAR(h.end_mm.z(), 100 - 0.4 * 25.4, 1e-9);
+    EXPECT_NEAR(h.r_mm, 100 + 0.1 * 25.4, 1e-9);
+    EXPECT_NEAR(h.clear_mm, 100 + 0.1 * 25.4, 1e-9);
+    if (k > 0) {  // from over the hole before, at the clearance level
+      const nc::Motion& prev = k == 1 ? fx.motion : fx.more_holes[static_cast<size_t>(k - 2)];
+      EXPECT_EQ(h.start_mm, Eigen::Vector3d(prev.end_mm.x(), prev.end_mm.y(), prev.clear_mm));
+    }
+  }
+  EXPECT_NEAR(in.state().position_mm.x(), 100 + 25.4 * 1.5, 1e-9);  // the sixth hole, at 360 degrees
+  EXPECT_NEAR(in.state().position_mm.z(), 100 + 0.1 * 25.4, 1e-9);
+  // Under G90, L repeats drill the same hole.
+  in.execute(nc::lex_block("G90 G81 X1 Y1 Z-.2 R.1 L3", 4, "p.ngc"), fx);
+  ASSERT_EQ(fx.more_holes.size(), 2u);
+  EXPECT_EQ(fx.more_holes[1].end_mm, fx.motion.end_mm);
 }
 
 TEST(NcWriter, FormatsDeterministically) {
