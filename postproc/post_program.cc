@@ -152,6 +152,18 @@ class ProgramPost {
     ctrl_il_known_ = true;
     ctrl_il_mm_ = emitted_mm_.z();
   }
+  /// Where the controller stands after a piece's axis words (all three
+  /// written) for cmd: cmd under G90 (the numbers are as near to it as the
+  /// decimals allow); under G91 the last position plus the increments as
+  /// written, so that the rounding of one increment is made good by the
+  /// next instead of adding up along the program.
+  Vector3d reached(const Vector3d& cmd, bool g53) const {
+    const nc::State& st = interp_.state();
+    if (st.absolute) return cmd;
+    Vector3d r;
+    for (int a = 0; a < 3; ++a) r[a] = emitted_mm_[a] + written(program_value(a, cmd[a], g53), decimals()) * st.unit_mm;
+    return r;
+  }
   bool ctrl_il_known_ = false;
   double ctrl_il_mm_ = 0.0;
   static double written(double value, int dec) { return std::strtod(nc::format_number(value, dec).c_str(), nullptr); }
@@ -583,10 +595,21 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     edit.insert = insert;
     emit(nc::apply_edit(b, edit));
     ++report_.lines_changed;
-    if (m.kind == nc::MotionKind::kCycle)
+    if (m.kind == nc::MotionKind::kCycle) {
       emitted_mm_ = Vector3d(cmd.x(), cmd.y(), cycle_clear_mm);
-    else
+    } else if (s.absolute) {
       emitted_mm_ = cmd;
+    } else {
+      // G91: the controller adds the increments as written (an axis not
+      // named, or named unchanged, moves by what the block says).
+      for (int a = 0; a < 3; ++a) {
+        const int idx = index_of("XYZ"[a]);
+        if (needed[static_cast<size_t>(a)])
+          emitted_mm_[a] += written(program_value(a, cmd[a], fx.g53), dec) * s.unit_mm;
+        else if (idx >= 0)
+          emitted_mm_[a] += b.words[static_cast<size_t>(idx)].value * s.unit_mm;
+      }
+    }
     emitted_known_ = true;
     return;
   }
@@ -650,7 +673,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   nc::apply_edit(b, edit, edited_);
   emit(edited_);
   ++report_.lines_changed;
-  emitted_mm_ = pieces[0].command_mm;
+  emitted_mm_ = reached(pieces[0].command_mm, g53);
   for (size_t k = 1; k < pieces.size(); ++k) {
     words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end, w);
     // A piece below the output resolution (a lost-motion step at a
@@ -664,7 +687,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     l += w;
     emit(l);
     ++report_.lines_added;
-    emitted_mm_ = pieces[k].command_mm;
+    emitted_mm_ = reached(pieces[k].command_mm, g53);
   }
   emitted_known_ = true;
   (void)length;

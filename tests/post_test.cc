@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "core/errors_csv.h"
@@ -269,6 +270,27 @@ TEST(Post, DeterministicOutput) {
   const std::string p = "G21\nG0 X0 Y0 Z5\nF200 G1 X100 Y50 Z0\nG3 X120 Y70 R20\n";
   EXPECT_EQ(post(p, hsu_errors(), offset_setup(100, 100, 100)),
             post(p, hsu_errors(), offset_setup(100, 100, 100)));
+}
+
+// Under G91 each written increment is rounded to the output's decimals; the
+// next increment must start from where the controller really is, or the
+// roundings add up along the program (a random walk: some micrometres after
+// thousands of moves). The real machine (verify, reading the numbers as
+// written) stays within the tolerance to the end.
+TEST(PostIncremental, RoundingsOfIncrementsDoNotAddUp) {
+  std::string program = "G21 G90 G17\nG0 X20 Y20 Z50\nG91 G1 F500\n";
+  for (int k = 0; k < 3000; ++k) {
+    const int row = k / 100, col = k % 100;
+    const double dx = (row % 2 == 0 ? 1 : -1) * 1.1;  // a zig-zag of 1.1 mm steps
+    program += fmt::format("X{:.4f} Y{:.4f}\n", col == 99 ? 0.0 : dx, col == 99 ? 1.3 : 0.0);
+  }
+  program += "G90\nM2\n";
+  const nc::ProgramSetup s = offset_setup(100, 50, 100);
+  const std::string out = post(program, hsu_errors(), s);
+  std::istringstream a(program), b(out);
+  const post::VerifyResult r = post::verify_programs(a, "inc.ngc", b, "out.ngc", hsu(), hsu_errors(), s, {});
+  EXPECT_GT(r.before.max_um, 5.0);
+  EXPECT_LE(r.after.max_um, 1.0 + 0.09) << "worst at line " << r.after.worst_line;
 }
 
 // post --table (cli.md): the table's interpolated tool-tip error stands for
