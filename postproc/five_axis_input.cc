@@ -340,6 +340,8 @@ void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
       continue;
     }
     if (L == 'R') fail(col, "R-form arcs are not supported by the five-axis post; output I J K centres");
+    if (L == '@' || L == '^')
+      fail(col, "polar coordinates (@ ^) are not supported by the five-axis post; output X and Y");
     fail(col, fmt::format("word {} is not supported by the five-axis post", L));
   }
   if (g93 && g94) fail(1, "G93 and G94 in one block");

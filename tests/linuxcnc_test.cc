@@ -14,6 +14,7 @@
 #include <regex>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "core/errors_csv.h"
@@ -118,24 +119,33 @@ Canon canonical(const std::string& program, const std::string& tool_table) {
 struct Case {
   const char* program;
   const char* extra_args;
+  const char* machine;  // sample name (machine and errors)
+  double wo[3];         // work offset, mm
 };
 
 TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
   require_rs274();
   const std::string nc = "/usr/share/linuxcnc/ncfiles/";
   const std::string tbl = "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/simpockets.tbl";
-  // (plasmatest.ngc, 594 x 311 mm, does not fit the sample's 500 x 400 travel.)
-  const Case cases[] = {{"tort.ngc", ""}, {"arcspiral.ngc", ""}, {"3dtest.ngc", ""},
-                        {"cds.ngc", "--tool-table"}};
-  const std::string machine = test::source_path("samples/machines/hsu-3axis.json");
-  const std::string errors = test::source_path("samples/errors/hsu-3axis.csv");
-  const Machine m = load_machine_json(machine);
-  const ErrorSet e = load_errors_csv(errors);
-  const Eigen::Vector3d wo(250, 200, 100);
+  // hole-circle.ngc: polar coordinates and a G91 drill cycle repeated round a
+  // circle (L6), in inches. plasmatest.ngc: a 594 x 311 mm plasma program
+  // that never commands Z, on the 1000 x 600 mm gantry sample; rs274 starts
+  // at program Z 0, and so does the post (--initial-position).
+  const Case cases[] = {{"tort.ngc", "", "hsu-3axis", {250, 200, 100}},
+                        {"arcspiral.ngc", "", "hsu-3axis", {250, 200, 100}},
+                        {"3dtest.ngc", "", "hsu-3axis", {250, 200, 100}},
+                        {"cds.ngc", "--tool-table", "hsu-3axis", {250, 200, 100}},
+                        {"hole-circle.ngc", "", "hsu-3axis", {250, 200, 100}},
+                        {"plasmatest.ngc", "--initial-position 0,0,0", "gantry-3axis", {100, 100, 100}}};
   const fs::path dir = fs::path(::testing::TempDir()) / "volmap_linuxcnc";
   fs::create_directories(dir);
   for (const Case& k : cases) {
     SCOPED_TRACE(k.program);
+    const std::string machine = test::source_path(std::string("samples/machines/") + k.machine + ".json");
+    const std::string errors = test::source_path(std::string("samples/errors/") + k.machine + ".csv");
+    const Machine m = load_machine_json(machine);
+    const ErrorSet e = load_errors_csv(errors);
+    const Eigen::Vector3d wo(k.wo[0], k.wo[1], k.wo[2]);
     const std::string in = nc + k.program;
     ASSERT_TRUE(fs::exists(in)) << in;
     const std::string out = (dir / (std::string("post-") + k.program)).string();
@@ -143,7 +153,8 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
     const bool uses_tools = args == "--tool-table";
     if (uses_tools) args += " " + tbl;
     const std::string cmd = test::volmap_binary() + " post --machine " + machine + " --errors " + errors +
-                            " --work-offset 250,200,100 " + args + " " + in + " -o " + out;
+                            fmt::format(" --work-offset {},{},{} ", k.wo[0], k.wo[1], k.wo[2]) + args + " " + in +
+                            " -o " + out;
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     const Canon before = canonical(in, uses_tools ? tbl : "");
     const Canon after = canonical(out, uses_tools ? tbl : "");
