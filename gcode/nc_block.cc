@@ -1,6 +1,6 @@
 #include "gcode/nc_block.h"
 
-#include <cctype>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -15,7 +15,107 @@ namespace {
   throw InputError(file, line, static_cast<int>(col) + 1, msg);
 }
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+// The letters that begin a word, upper case: A-Z, and LinuxCNC's polar
+// coordinates @ (radius) and ^ (angle, degrees), which the interpreter reads
+// as X and Y. The one place that says which letters are G-code words.
+constexpr bool is_word_letter(char upper) {
+  return (upper >= 'A' && upper <= 'Z') || upper == '@' || upper == '^';
+}
+
+// Character classes, looked up once per character instead of a chain of
+// comparisons: the lexer's inner loops are the post's hottest code.
+enum CharClass : std::uint8_t { kOther = 0, kSpace, kDigit };
+struct CharTable {
+  std::array<std::uint8_t, 256> cls{};
+  std::array<char, 256> upper{};  ///< the word letter a character begins (ASCII toupper), or 0
+};
+constexpr CharTable make_char_table() {
+  CharTable t;
+  for (int c = 0; c < 256; ++c) {
+    const char ch = static_cast<char>(c);
+    if (ch == ' ' || ch == '\t' || ch == '\r') t.cls[static_cast<size_t>(c)] = kSpace;
+    if (ch >= '0' && ch <= '9') t.cls[static_cast<size_t>(c)] = kDigit;
+    const char up = ch >= 'a' && ch <= 'z' ? static_cast<char>(ch - 'a' + 'A') : ch;
+    if (c < 128 && is_word_letter(up)) t.upper[static_cast<size_t>(c)] = up;
+  }
+  return t;
+}
+constexpr CharTable kChars = make_char_table();
+
+bool is_space(char c) { return kChars.cls[static_cast<unsigned char>(c)] == kSpace; }
+
+constexpr const char* kNoParameters =
+    "# parameters are not supported: the post-processor needs literal numbers; "
+    "expand parameters in CAM (or with LinuxCNC's interpreter) first";
+constexpr const char* kNoExpressions = "[ ] expressions are not supported; output literal numbers from CAM";
+
+constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                             1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+// Reading past the line's end: the lexer reads its copy of the line with
+// this many zero bytes after it (never a digit, a space or a sign).
+constexpr size_t kPadding = 8;
+
+struct GeneralNumber {
+  size_t end = 0;  ///< where the word ends (after its last number character)
+  std::string_view number;  ///< its characters (into `spaced` when spaces were inside)
+  std::uint64_t mantissa = 0;
+  int significant = 0, decimals = 0;
+  bool negative = false;
+};
+
+// The number of a word in every form RS274NGC allows: sign, digits, point,
+// with spaces allowed between its characters (collected into `spaced` only
+// when there are such spaces). `i` is just after the letter.
+GeneralNumber read_number_general(std::string_view text, int line, const std::string& file, size_t i,
+                                  std::string& spaced) {
+  const size_t n = text.size();
+  {
+    size_t k = i;
+    while (k < n && is_space(text[k])) ++k;
+    if (k < n && text[k] == '#') fail(file, line, k, kNoParameters);
+    if (k < n && text[k] == '[') fail(file, line, k, kNoExpressions);
+  }
+  GeneralNumber g;
+  size_t first_char = i;
+  bool contiguous = true;
+  size_t last = i;
+  bool seen_point = false;
+  while (i < n) {
+    const char d = text[i];
+    if (is_space(d)) {
+      ++i;
+      continue;
+    }
+    const bool sign = (d == '+' || d == '-') && last == first_char;
+    if ((d >= '0' && d <= '9') || sign || (d == '.' && !seen_point)) {
+      if (d == '.') {
+        seen_point = true;
+      } else if (d == '-' || d == '+') {
+        g.negative = d == '-';
+      } else {
+        if (seen_point) ++g.decimals;
+        if (g.mantissa != 0 || d != '0') ++g.significant;
+        g.mantissa = g.mantissa * 10 + static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
+      }
+      if (last == first_char) {
+        first_char = i;  // spaces before the number: it starts here
+      } else if (contiguous && i != last) {  // spaces inside the number: collect it
+        contiguous = false;
+        spaced.assign(text.substr(first_char, last - first_char));
+        std::erase_if(spaced, is_space);
+      }
+      if (!contiguous) spaced += d;
+      ++i;
+      last = i;
+      continue;
+    }
+    break;
+  }
+  g.end = last;
+  g.number = contiguous ? text.substr(first_char, last - first_char) : std::string_view(spaced);
+  return g;
+}
 
 }  // namespace
 
@@ -26,7 +126,11 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
 }
 
 void lex_block_into(std::string_view text, int line, const std::string& file, Block& b) {
+  // The copy of the line with zero bytes after it, while it is read: the
+  // loops below need no end checks inside a word (the zero bytes end every
+  // number and every run of spaces). Cut back to the line before returning.
   b.text.assign(text);
+  b.text.append(kPadding, '\0');
   b.line = line;
   b.block_delete = false;
   b.percent = false;
@@ -34,121 +138,109 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
   b.comment.clear();
   size_t i = 0;
   const size_t n = text.size();
+  const char* const t = b.text.data();
   auto skip_space = [&] {
-    while (i < n && is_space(text[i])) ++i;
+    while (kChars.cls[static_cast<unsigned char>(t[i])] == kSpace) ++i;
   };
   skip_space();
-  if (i < n && text[i] == '%') {
+  if (i < n && t[i] == '%') {
     b.percent = true;
     ++i;
     skip_space();
-    if (i < n && text[i] != ';' && text[i] != '(')
+    if (i < n && t[i] != ';' && t[i] != '(')
       fail(file, line, i, "text after '%' on the program delimiter line; put it on a line of its own");
+    b.text.resize(n);
     return;
   }
-  if (i < n && text[i] == '/') {
+  if (i < n && t[i] == '/') {
     b.block_delete = true;
     ++i;
   }
-  while (i < n) {
+  std::string spaced;  // a number written with spaces inside, joined (rare)
+  // One pass over the line: each character is looked at once on the path
+  // CAM's plain words take (letter, [sign] digits [. digits]).
+  for (;;) {
     skip_space();
     if (i >= n) break;
-    const char c = text[i];
-    if (c == ';') break;  // comment to end of line
-    if (c == '(') {
-      const size_t close = text.find(')', i + 1);
-      if (close == std::string_view::npos)
-        fail(file, line, i, "comment '(' is not closed; add ')'");
-      if (text.substr(i + 1, close - i - 1).find('(') != std::string_view::npos)
-        fail(file, line, i, "nested comment; RS274NGC comments do not nest");
-      if (b.comment.empty()) b.comment = std::string(text.substr(i + 1, close - i - 1));
-      i = close + 1;
-      continue;
+    const auto c = static_cast<unsigned char>(t[i]);
+    const char letter = kChars.upper[c];  // 0: not a word letter
+    if (letter == 0 || letter == 'O') {
+      if (c == ';') break;  // comment to end of line
+      if (c == '(') {
+        const size_t close = text.find(')', i + 1);
+        if (close == std::string_view::npos)
+          fail(file, line, i, "comment '(' is not closed; add ')'");
+        if (text.substr(i + 1, close - i - 1).find('(') != std::string_view::npos)
+          fail(file, line, i, "nested comment; RS274NGC comments do not nest");
+        if (b.comment.empty()) b.comment = std::string(text.substr(i + 1, close - i - 1));
+        i = close + 1;
+        continue;
+      }
+      if (c == '#') fail(file, line, i, kNoParameters);
+      if (c == '[') fail(file, line, i, kNoExpressions);
+      if (letter == 'O')
+        fail(file, line, i,
+             "O-word control flow (subroutines, loops, conditionals) is not supported; "
+             "expand it in CAM to a flat program");
+      fail(file, line, i, std::string("unexpected character '") + static_cast<char>(c) + "'; not a G-code word");
     }
-    if (c == '#')
-      fail(file, line, i,
-           "# parameters are not supported: the post-processor needs literal numbers; "
-           "expand parameters in CAM (or with LinuxCNC's interpreter) first");
-    if (c == '[')
-      fail(file, line, i,
-           "[ ] expressions are not supported; output literal numbers from CAM");
-    const char letter = c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;  // ASCII toupper
-    if (letter == 'O')
-      fail(file, line, i,
-           "O-word control flow (subroutines, loops, conditionals) is not supported; "
-           "expand it in CAM to a flat program");
-    // Word letters: A-Z, and LinuxCNC's polar coordinates @ (radius) and ^
-    // (angle, degrees), which the interpreter reads as X and Y.
-    if ((letter < 'A' || letter > 'Z') && letter != '@' && letter != '^')
-      fail(file, line, i, std::string("unexpected character '") + c + "'; not a G-code word");
     Word w;
     w.letter = letter;
     w.begin = static_cast<std::uint32_t>(i);
     ++i;
-    {
-      size_t k = i;
-      while (k < n && is_space(text[k])) ++k;
-      if (k < n && text[k] == '#')
-        fail(file, line, k,
-             "# parameters are not supported: the post-processor needs literal numbers; "
-             "expand parameters in CAM (or with LinuxCNC's interpreter) first");
-      if (k < n && text[k] == '[')
-        fail(file, line, k, "[ ] expressions are not supported; output literal numbers from CAM");
-    }
-    // The number: sign, digits, point; spaces allowed between its characters
-    // (collected into `number` only when there are such spaces).
-    std::string_view number;
-    std::string spaced;
-    size_t first_char = i;
-    bool contiguous = true;
-    size_t last = i;
-    bool seen_point = false;
-    int decimals = 0;
-    // The value as the digits go by: mantissa, significant digits, sign.
+    // Fast path, the form CAM writes: [sign] digits [. digits] right after
+    // the letter and not continued after spaces by a digit or a point.
+    // Anything else (spaces inside the number, no digits, # or [ after the
+    // letter, ...) takes the general path below, which reads every form.
     std::uint64_t mantissa = 0;
-    int significant = 0;
+    int decimals = 0;
     bool negative = false;
-    while (i < n) {
-      const char d = text[i];
-      if (is_space(d)) {
-        ++i;
-        continue;
+    size_t k = i;
+    if (t[k] == '-' || t[k] == '+') negative = t[k++] == '-';
+    const size_t int_begin = k;
+    // (The mantissa wraps harmlessly past 19 digits: then `digits` says so.)
+    auto read_digits = [&] {
+      unsigned d;
+      while ((d = static_cast<unsigned char>(t[k]) - '0') <= 9) {
+        mantissa = mantissa * 10 + d;
+        ++k;
       }
-      const bool sign = (d == '+' || d == '-') && last == first_char;
-      if ((d >= '0' && d <= '9') || sign || (d == '.' && !seen_point)) {
-        if (d == '.') {
-          seen_point = true;
-        } else if (d == '-' || d == '+') {
-          negative = d == '-';
-        } else {
-          if (seen_point) ++decimals;
-          if (mantissa != 0 || d != '0') ++significant;
-          mantissa = mantissa * 10 + static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
-        }
-        if (last == first_char) {
-          first_char = i;  // spaces before the number: it starts here
-        } else if (contiguous && i != last) {  // spaces inside the number: collect it
-          contiguous = false;
-          spaced.assign(text.substr(first_char, last - first_char));
-          std::erase_if(spaced, is_space);
-        }
-        if (!contiguous) spaced += d;
-        ++i;
-        last = i;
-        continue;
-      }
-      break;
+    };
+    read_digits();
+    size_t digits = k - int_begin;
+    if (t[k] == '.') {
+      const size_t frac_begin = ++k;
+      read_digits();
+      decimals = static_cast<int>(k - frac_begin);
+      digits += k - frac_begin;
     }
-    i = last;
-    number = contiguous ? text.substr(first_char, last - first_char) : std::string_view(spaced);
-    if (number.empty() || number == "+" || number == "-" || number == "." ||
-        number == "+." || number == "-.")
-      fail(file, line, w.begin, std::string("word '") + letter + "' has no number");
+    bool fast = digits > 0;
+    if (fast && kChars.cls[static_cast<unsigned char>(t[k])] == kSpace) {
+      size_t after = k + 1;
+      while (kChars.cls[static_cast<unsigned char>(t[after])] == kSpace) ++after;
+      // Spaces inside a number join its parts (RS274NGC): the general path.
+      if (kChars.cls[static_cast<unsigned char>(t[after])] == kDigit || t[after] == '.') fast = false;
+    }
+    // mantissa < 10^15: at most 15 significant digits, exact in a double.
+    bool exact = digits <= 19 && mantissa < 1000000000000000ull;
+    std::string_view number;  // needed only when std::from_chars reads it
+    if (fast) {
+      number = text.substr(i, k - i);
+      i = k;
+    } else {
+      const GeneralNumber g = read_number_general(text, line, file, i, spaced);
+      i = g.end;
+      number = g.number;
+      mantissa = g.mantissa;
+      decimals = g.decimals;
+      negative = g.negative;
+      exact = g.significant <= 15;
+      if (number.empty() || number == "+" || number == "-" || number == "." || number == "+." ||
+          number == "-.")
+        fail(file, line, w.begin, std::string("word '") + letter + "' has no number");
+    }
     double v = 0;
-    static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                        1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                        1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-    if (significant <= 15 && decimals <= 22) {
+    if (exact && decimals <= 22) {
       // Exact: an integer below 2^53 over an exact power of ten, one
       // correctly rounded division (Clinger), as std::from_chars gives.
       const double r = static_cast<double>(mantissa) / kPow10[decimals];
@@ -161,7 +253,7 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     }
     w.value = v;
     w.decimals = decimals;
-    w.end = static_cast<std::uint32_t>(last);
+    w.end = static_cast<std::uint32_t>(i);
     if (letter == 'G' || letter == 'M') {
       const double scaled = v * 10.0;
       const double r = std::round(scaled);
@@ -171,6 +263,7 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     }
     b.words.push_back(w);
   }
+  b.text.resize(n);
 }
 
 }  // namespace volmap::nc

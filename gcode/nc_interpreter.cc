@@ -101,6 +101,16 @@ int m_group(int code10, const char** why) {
   }
 }
 
+// Letters whose words need nothing but "not twice in a block": all of A-Z
+// except G and M (modal groups), N (may repeat), the axes the three-axis
+// post refuses (A B C U V W) and D E (refused); '@' '^' are handled apart.
+constexpr std::array<bool, 256> kPlainLetter = [] {
+  std::array<bool, 256> t{};
+  for (char c = 'A'; c <= 'Z'; ++c) t[static_cast<unsigned char>(c)] = true;
+  for (char c : {'G', 'M', 'N', 'A', 'B', 'C', 'U', 'V', 'W', 'D', 'E'}) t[static_cast<unsigned char>(c)] = false;
+  return t;
+}();
+
 bool is_cycle(int motion) {
   return motion == 730 || (motion >= 810 && motion <= 890);
 }
@@ -121,7 +131,14 @@ void Interpreter::fail(const Block& b, const Word* w, const std::string& msg) co
 }
 
 void Interpreter::execute(const Block& b, BlockEffect& effect) {
-  effect = BlockEffect{};
+  // Every field as BlockEffect{} has it, without building and moving a
+  // whole one (more_holes keeps its storage for the next cycle block).
+  effect.has_motion = false;
+  effect.motion = Motion{};
+  effect.g53 = false;
+  effect.stop_code = false;
+  effect.motion_code = -1;
+  effect.more_holes.clear();
   if (b.percent || b.words.empty()) return;
   if (s_.ended) return;  // after M2/M30 nothing executes (LinuxCNC ignores the rest)
 
@@ -134,6 +151,13 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   const Word* polar_angle = nullptr;   // ^: degrees, counter-clockwise from +X
   unsigned g_mask = 0, m_mask = 0;
   for (const Word& w : b.words) {
+    // Most words are plain letters (X Y Z F ...): one test sends them on.
+    if (kPlainLetter[static_cast<unsigned char>(w.letter)]) {
+      const size_t L = static_cast<size_t>(w.letter - 'A');
+      if (letter[L]) fail(b, &w, fmt::format("word {} appears twice in one block", w.letter));
+      letter[L] = &w;
+      continue;
+    }
     if (w.letter == 'G') {
       const char* why = nullptr;
       const int grp = w.code10 < 0 ? -1 : g_group(w.code10, &why);

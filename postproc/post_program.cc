@@ -67,6 +67,51 @@ struct Piece {
   double s_end;
 };
 
+// A growable byte buffer written through a pointer: room(n) makes n bytes
+// writable at the end without initialising them (std::string::resize would
+// zero them), commit(end) keeps what was written up to end. The writer's
+// numbers and edited lines go straight into it, no string per piece.
+class CharBuffer {
+ public:
+  char* room(std::size_t n) {
+    if (cap_ - size_ < n) grow(n);
+    return data_.get() + size_;
+  }
+  void commit(const char* end) { size_ = static_cast<std::size_t>(end - data_.get()); }
+  void append(std::string_view s) {
+    std::memcpy(room(s.size()), s.data(), s.size());
+    size_ += s.size();
+  }
+  void assign(std::string_view s) {
+    size_ = 0;
+    append(s);
+  }
+  void clear() { size_ = 0; }
+  std::size_t size() const { return size_; }
+  const char* data() const { return data_.get(); }
+  std::string_view view() const { return {data_.get(), size_}; }
+
+ private:
+  void grow(std::size_t n) {
+    const std::size_t cap = std::max(2 * cap_, size_ + n);
+    std::unique_ptr<char[]> bigger(new char[cap]);  // uninitialised, as room() promises
+    if (size_) std::memcpy(bigger.get(), data_.get(), size_);
+    data_ = std::move(bigger);
+    cap_ = cap;
+  }
+  std::unique_ptr<char[]> data_;
+  std::size_t size_ = 0, cap_ = 0;
+};
+
+// format_number(value, dec) appended to w.
+void append_number(CharBuffer& w, double value, int dec) {
+  char* p = w.room(nc::kNumberRoom);
+  if (const char* end = nc::format_number_fast(value, dec, p))
+    w.commit(end);
+  else
+    w.append(nc::format_number(value, dec));
+}
+
 class ProgramPost {
  public:
   ProgramPost(const std::string& file, std::ostream& out, const Machine& machine,
@@ -81,6 +126,8 @@ class ProgramPost {
     out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
     out_buffer_.clear();
   }
+  // Output gathered in 64 KB pieces.
+  static constexpr std::size_t kFlushAt = std::size_t{1} << 16;
   const PostReport& report() const { return report_; }
 
  private:
@@ -173,18 +220,25 @@ class ProgramPost {
     if (s.absolute) return (v_mm - (g53 ? 0.0 : interp_.work_offset()[a])) / s.unit_mm;
     return (v_mm - emitted_mm_[a]) / s.unit_mm;
   }
-  void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, std::string& s) {
-    const std::size_t start = s.size();
+  void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, CharBuffer& s) {
+    const int dec = decimals();
     for (int a = 0; a < 3; ++a) {
-      if (s.size() > start && spaces) s += ' ';
-      s += lower ? "xyz"[a] : "XYZ"[a];
-      s += nc::format_number(program_value(a, cmd[a], g53), decimals());
+      char* p = s.room(2);
+      if (a > 0 && spaces) *p++ = ' ';
+      *p++ = lower ? "xyz"[a] : "XYZ"[a];
+      s.commit(p);
+      append_number(s, program_value(a, cmd[a], g53), dec);
     }
   }
+  void end_line(char* p) {
+    std::memcpy(p, line_ending_, 2);  // room for both was made; only the ending's length counts
+    out_buffer_.commit(p + line_ending_size_);
+    if (out_buffer_.size() >= kFlushAt) flush();
+  }
   void emit(std::string_view text) {
-    out_buffer_.append(text);
-    out_buffer_.append(line_ending_);
-    if (out_buffer_.size() >= (1u << 16)) flush();
+    char* p = out_buffer_.room(text.size() + 2);
+    std::memcpy(p, text.data(), text.size());
+    end_line(p + text.size());
   }
 
   std::string file_;
@@ -200,8 +254,9 @@ class ProgramPost {
   bool emitted_known_ = false;
   ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
   int current_line_ = 0;
-  std::string line_ending_;
-  std::string out_buffer_;
+  char line_ending_[2] = {};  ///< the line's ending as read: "", "\n", "\r" or "\r\n"
+  std::size_t line_ending_size_ = 0;
+  CharBuffer out_buffer_;
   nc::Block block_;  ///< the line being read (storage reused line after line)
   struct Pending {
     double s0, s1;
@@ -211,8 +266,7 @@ class ProgramPost {
   };
   std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
   std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
-  nc::BlockEdit edit_;          ///< scratch of the writer (storage reused)
-  std::string words_, previous_words_, edited_;
+  CharBuffer words_, previous_words_, insert_;  ///< scratch of the writer (storage reused)
   /// The last point corrected: command solves command + e(command, dir) =
   /// nominal (to solve_accuracy_mm()).
   struct LastCorrected {
@@ -450,9 +504,9 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   // without a newline stays without one).
   const bool cr = !raw.empty() && raw.back() == '\r';
   const std::string_view text = cr ? raw.substr(0, raw.size() - 1) : raw;
-  line_ending_.clear();
-  if (cr) line_ending_.push_back('\r');
-  if (newline) line_ending_.push_back('\n');
+  line_ending_size_ = 0;
+  if (cr) line_ending_[line_ending_size_++] = '\r';
+  if (newline) line_ending_[line_ending_size_++] = '\n';
   nc::lex_block_into(text, number, file_, block_);
   const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
@@ -486,8 +540,9 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     return;
   }
   const nc::Motion& m = fx.motion;
-  const bool lower = nc::block_uses_lowercase(b);
-  const bool spaces = nc::block_uses_spaces(b);
+  const nc::BlockStyle style = nc::block_style(b);
+  const bool lower = style.lowercase;
+  const bool spaces = style.spaces;
   const int dec = decimals();
   static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
   const double half_unit = dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
@@ -498,10 +553,16 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
       if (b.words[k].letter == L) return static_cast<int>(k);
     return -1;
   };
+  // Those of X, Y and Z, asked for again and again: found in one pass.
+  int axis_index[3] = {-1, -1, -1};
+  for (size_t k = b.words.size(); k-- > 0;) {
+    const char L = b.words[k].letter;
+    if (L >= 'X' && L <= 'Z') axis_index[L - 'X'] = static_cast<int>(k);  // the first one wins
+  }
   // Does axis a need a new word to command cmd? Compared with what the block
   // writes (or, for an absent word, with staying put).
   auto needs_word = [&](int a, const Vector3d& cmd) {
-    const int idx = index_of("XYZ"[a]);
+    const int idx = axis_index[a];
     double old_value;
     if (idx >= 0)
       old_value = b.words[static_cast<size_t>(idx)].value;
@@ -631,47 +692,53 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     }
   }
   const nc::State& s = interp_.state();
-  const double length = nc::path_length_mm(m);
-  auto g93_feed = [&](double s0, double s1) {
-    // Inverse time: the piece takes its share of the block's time.
-    const double share = std::max(1e-12, s1 - s0);
-    return nc::format_number(s.feed / share, 4);
-  };
-  // The block itself becomes the first piece.
-  nc::BlockEdit& edit = edit_;
-  edit.remove.clear();
-  for (char L : {'X', 'Y', 'Z'})
-    if (const int i = index_of(L); i >= 0) edit.remove.push_back(i);
+  // The block itself becomes the first piece: its X Y Z words (and an
+  // arc's I J K R P and G2/G3, G93's F) give way to the piece's words. At
+  // most 3 + 5 + 1 + 1 distinct words (a letter twice, or two motion G
+  // codes, the interpreter refused).
+  std::array<int, 10> remove;
+  std::size_t removed = 0;
+  for (int a = 0; a < 3; ++a)
+    if (axis_index[a] >= 0) remove[removed++] = axis_index[a];
   if (arc) {
     for (char L : {'I', 'J', 'K', 'R', 'P'})
-      if (const int i = index_of(L); i >= 0) edit.remove.push_back(i);
+      if (const int i = index_of(L); i >= 0) remove[removed++] = i;
     for (size_t k = 0; k < b.words.size(); ++k)
       if (b.words[k].letter == 'G' && (b.words[k].code10 == 20 || b.words[k].code10 == 30))
-        edit.remove.push_back(static_cast<int>(k));
+        remove[removed++] = static_cast<int>(k);
   }
   const bool g93 = s.feed_mode == 930;
   if (g93)
-    if (const int i = index_of('F'); i >= 0) edit.remove.push_back(i);
-  std::string& insert = edit.insert;
-  insert.assign(arc ? (lower ? "g1" : "G1") : "");
+    if (const int i = index_of('F'); i >= 0) remove[removed++] = i;
+  std::sort(remove.begin(), remove.begin() + static_cast<std::ptrdiff_t>(removed));
   const bool g53 = fx.g53;
   // The words of a piece into w (storage reused: no allocation per line).
-  auto words_for = [&](const Vector3d& cmd, double s0, double s1, std::string& w) {
+  auto words_for = [&](const Vector3d& cmd, double s0, double s1, CharBuffer& w) {
     w.clear();
     append_axis_words(cmd, g53, lower, spaces, w);
     if (g93) {
-      if (spaces) w += ' ';
-      w += lower ? 'f' : 'F';
-      w += g93_feed(s0, s1);
+      char* p = w.room(2);
+      if (spaces) *p++ = ' ';
+      *p++ = lower ? 'f' : 'F';
+      w.commit(p);
+      // Inverse time: the piece takes its share of the block's time.
+      const double share = std::max(1e-12, s1 - s0);
+      append_number(w, s.feed / share, 4);
     }
   };
-  if (!insert.empty() && spaces) insert += ' ';
-  std::string& previous_words = previous_words_;
-  std::string& w = words_;
+  CharBuffer& previous_words = previous_words_;
+  CharBuffer& w = words_;
   words_for(pieces[0].command_mm, 0.0, pieces[0].s_end, previous_words);
-  insert += previous_words;
-  nc::apply_edit(b, edit, edited_);
-  emit(edited_);
+  std::string_view insert = previous_words.view();
+  if (arc) {
+    insert_.assign(lower ? "g1" : "G1");
+    if (spaces) insert_.append(" ");
+    insert_.append(insert);
+    insert = insert_.view();
+  }
+  // Straight into the output: the line can grow by the insert and a space.
+  char* out = out_buffer_.room(text.size() + insert.size() + 1 + 2);
+  end_line(nc::apply_edit_to(b, remove.data(), removed, insert, spaces, out));
   ++report_.lines_changed;
   emitted_mm_ = reached(pieces[0].command_mm, g53);
   for (size_t k = 1; k < pieces.size(); ++k) {
@@ -679,18 +746,18 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     // A piece below the output resolution (a lost-motion step at a
     // reversal) would repeat the line before it: the controller cannot
     // command it, so it is not written.
-    if (w == previous_words && !g93 && s.absolute) continue;
-    previous_words = w;
-    std::string& l = edited_;
-    l.assign(lower ? "g1" : "G1");
-    if (spaces) l += ' ';
-    l += w;
-    emit(l);
+    if (w.view() == previous_words.view() && !g93 && s.absolute) continue;
+    previous_words.assign(w.view());
+    char* l = out_buffer_.room(3 + w.size() + 2);
+    *l++ = lower ? 'g' : 'G';
+    *l++ = '1';
+    if (spaces) *l++ = ' ';
+    std::memcpy(l, w.data(), w.size());
+    end_line(l + w.size());
     ++report_.lines_added;
     emitted_mm_ = reached(pieces[k].command_mm, g53);
   }
   emitted_known_ = true;
-  (void)length;
 }
 
 }  // namespace
