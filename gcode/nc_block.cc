@@ -52,10 +52,6 @@ constexpr const char* kNoExpressions = "[ ] expressions are not supported; outpu
 constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
                              1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
-// Reading past the line's end: the lexer reads its copy of the line with
-// this many zero bytes after it (never a digit, a space or a sign).
-constexpr size_t kPadding = 8;
-
 struct GeneralNumber {
   size_t end = 0;  ///< where the word ends (after its last number character)
   std::string_view number;  ///< its characters (into `spaced` when spaces were inside)
@@ -126,11 +122,10 @@ Block lex_block(std::string_view text, int line, const std::string& file) {
 }
 
 void lex_block_into(std::string_view text, int line, const std::string& file, Block& b) {
-  // The copy of the line with zero bytes after it, while it is read: the
-  // loops below need no end checks inside a word (the zero bytes end every
-  // number and every run of spaces). Cut back to the line before returning.
+  // The lexer reads its copy of the line: std::string ends it with a zero
+  // byte, which is not a digit, a sign, a point or a space, so the loops
+  // inside a word need no end checks.
   b.text.assign(text);
-  b.text.append(kPadding, '\0');
   b.line = line;
   b.block_delete = false;
   b.percent = false;
@@ -138,7 +133,7 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
   b.comment.clear();
   size_t i = 0;
   const size_t n = text.size();
-  const char* const t = b.text.data();
+  const char* const t = b.text.c_str();
   auto skip_space = [&] {
     while (kChars.cls[static_cast<unsigned char>(t[i])] == kSpace) ++i;
   };
@@ -149,7 +144,6 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     skip_space();
     if (i < n && t[i] != ';' && t[i] != '(')
       fail(file, line, i, "text after '%' on the program delimiter line; put it on a line of its own");
-    b.text.resize(n);
     return;
   }
   if (i < n && t[i] == '/') {
@@ -225,7 +219,7 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     bool exact = digits <= 19 && mantissa < 1000000000000000ull;
     std::string_view number;  // needed only when std::from_chars reads it
     if (fast) {
-      number = text.substr(i, k - i);
+      number = std::string_view(t + i, k - i);
       i = k;
     } else {
       const GeneralNumber g = read_number_general(text, line, file, i, spaced);
@@ -263,7 +257,6 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     }
     b.words.push_back(w);
   }
-  b.text.resize(n);
 }
 
 }  // namespace volmap::nc
