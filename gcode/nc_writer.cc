@@ -28,18 +28,6 @@ inline void write_digits(std::uint32_t v, int count, char* end) {
   if (count) *--end = static_cast<char>('0' + v % 10);
 }
 
-// The 8 decimal digits of v < 1e8 (zero-padded) as byte values 0..9, the
-// most significant in the lowest byte (memory order on little-endian x86):
-// two splits by 10000, 100 and 10 done on all lanes of a 64-bit word at
-// once by multiply-and-shift (exact for these ranges), no loop.
-inline std::uint64_t eight_digits(std::uint32_t v) {
-  const std::uint64_t hl = (v / 10000) | (std::uint64_t{v % 10000} << 32);
-  const std::uint64_t q = ((hl * 10486) >> 20) & 0x0000007F0000007Full;  // x / 100 for x < 10000
-  const std::uint64_t hhll = q | ((hl - q * 100) << 16);
-  const std::uint64_t q2 = ((hhll * 103) >> 10) & 0x000F000F000F000Full;  // x / 10 for x < 100
-  return q2 | ((hhll - q2 * 10) << 8);
-}
-
 // Decimal digits of v < 1e9 (at least 1).
 inline int digit_count(std::uint32_t v) {
   static constexpr std::uint32_t kPow10u[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000,
@@ -51,50 +39,14 @@ inline int digit_count(std::uint32_t v) {
 }
 }  // namespace
 
-// Fast path of format_number: value x 10^decimals rounded to an integer and
-// printed with its decimal point, when that integer is certainly the
-// correctly rounded one (the scaled value is not within 1e-6 of a tie and
-// below 1e9). The product carries at most one rounding (relative 1.1e-16),
-// far less than the margin, so the digits equal fmt's correctly rounded
-// ones. Otherwise (ties, huge values, more than 9 decimals) fmt decides.
-char* format_number_fast(double value, int decimals, char* out) {
-  static constexpr double kPow10[] = {1, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
+// format_number_fast's other cases (see nc_writer.h): k = value x
+// 10^decimals rounded, k >= 1e8 or more than 7 decimals; digits two at a
+// time from the right.
+char* detail::format_fixed_wide(double value, int decimals, std::uint32_t k, char* out) {
   static constexpr std::uint32_t kPow10u[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000,
                                               100000000, 1000000000};
-  if (decimals < 0 || decimals > 9) return nullptr;
-  const double scaled = std::abs(value) * kPow10[decimals];
-  if (!(scaled < 1e9)) return nullptr;  // NaN, infinities and large values too
-  // floor(scaled + 0.5) as a truncation (scaled >= 0; std::floor is a libm
-  // call without SSE4.1); below 1e9 + 0.5, so it fits 32 bits.
-  const auto k = static_cast<std::uint32_t>(scaled + 0.5);
-  if (std::abs(std::abs(scaled - static_cast<double>(k)) - 0.5) < 1e-6) return nullptr;
-  if (k == 0) {  // never "-0"
-    *out = '0';
-    return out + 1;
-  }
   char* p = out;
   if (value < 0) *p++ = '-';
-  static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "eight_digits' byte order");
-  if (k < 100000000 && decimals <= 7) {
-    // The usual case: all digits of k at once, then the integer part (at
-    // least one digit), the point and the fraction without its trailing
-    // zeros cut out of them by shifts. Stores are 8 bytes wide, within
-    // kNumberRoom: 1 + 8 + 1 + 8 at most.
-    const std::uint64_t raw = eight_digits(k);
-    const int significant = 8 - (__builtin_ctzll(raw) >> 3);  // k >= 1: some byte is nonzero
-    const int shown = significant > decimals ? significant : decimals + 1;
-    const std::uint64_t ascii = raw + 0x3030303030303030ull;
-    const std::uint64_t lead = ascii >> (8 * (8 - shown));
-    std::memcpy(p, &lead, 8);
-    p += shown - decimals;
-    if (decimals == 0) return p;
-    const std::uint64_t frac = raw >> (8 * (8 - decimals));
-    if (frac == 0) return p;
-    *p = '.';
-    const std::uint64_t frac_ascii = ascii >> (8 * (8 - decimals));
-    std::memcpy(p + 1, &frac_ascii, 8);
-    return p + 1 + (8 - (__builtin_clzll(frac) >> 3));  // up to its last nonzero digit
-  }
   const std::uint32_t int_part = k / kPow10u[decimals], frac = k - int_part * kPow10u[decimals];
   const int int_digits = digit_count(int_part);
   p += int_digits;
@@ -160,6 +112,31 @@ BlockStyle block_style(const Block& b) {
   return st;
 }
 
+namespace {
+// memcpy for the short pieces of a line (a word, the gap between words):
+// two overlapping word-sized moves instead of a library call.
+inline char* copy_bytes(char* out, const char* from, size_t n) {
+  if (n >= 8 && n <= 16) {
+    std::uint64_t a, b;
+    std::memcpy(&a, from, 8);
+    std::memcpy(&b, from + n - 8, 8);
+    std::memcpy(out, &a, 8);
+    std::memcpy(out + n - 8, &b, 8);
+  } else if (n >= 4 && n < 8) {
+    std::uint32_t a, b;
+    std::memcpy(&a, from, 4);
+    std::memcpy(&b, from + n - 4, 4);
+    std::memcpy(out, &a, 4);
+    std::memcpy(out + n - 4, &b, 4);
+  } else if (n < 4) {
+    for (size_t k = 0; k < n; ++k) out[k] = from[k];
+  } else {
+    std::memcpy(out, from, n);
+  }
+  return out + n;
+}
+}  // namespace
+
 char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::string_view insert, bool spaces,
                     char* out) {
   // apply_edit's steps on a raw buffer (no capacity checks: the caller made
@@ -172,12 +149,10 @@ char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::s
     const Word& w = b.words[static_cast<size_t>(remove[r])];
     size_t cut = w.begin;
     if (cut > pos && t[cut - 1] == ' ') --cut;  // the separating space goes with the word
-    std::memcpy(out, t.data() + pos, cut - pos);
-    out += cut - pos;
+    out = copy_bytes(out, t.data() + pos, cut - pos);
     if (!inserted) {
       if (out != line && spaces && out[-1] != ' ' && out[-1] != '\t') *out++ = ' ';
-      std::memcpy(out, insert.data(), insert.size());
-      out += insert.size();
+      out = copy_bytes(out, insert.data(), insert.size());
       inserted = true;
     }
     pos = w.end;
@@ -185,15 +160,12 @@ char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::s
   if (!inserted) {
     // Append after the last word, before any trailing comment or '\r'.
     const size_t at = b.words.empty() ? 0 : b.words.back().end;
-    std::memcpy(out, t.data() + pos, at - pos);
-    out += at - pos;
+    out = copy_bytes(out, t.data() + pos, at - pos);
     if (spaces && out != line && out[-1] != ' ') *out++ = ' ';
-    std::memcpy(out, insert.data(), insert.size());
-    out += insert.size();
+    out = copy_bytes(out, insert.data(), insert.size());
     pos = at;
   }
-  std::memcpy(out, t.data() + pos, t.size() - pos);
-  return out + (t.size() - pos);
+  return copy_bytes(out, t.data() + pos, t.size() - pos);
 }
 
 std::string apply_edit(const Block& b, const BlockEdit& edit) {

@@ -222,13 +222,24 @@ class ProgramPost {
   }
   void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, CharBuffer& s) {
     const int dec = decimals();
+    const char* letters = lower ? "xyz" : "XYZ";
+    // Room for the three words at once; a number the fast path does not
+    // write (rare) goes in through format_number.
+    constexpr std::size_t kRoom = 3 * (2 + nc::kNumberRoom);
+    char* p = s.room(kRoom);
     for (int a = 0; a < 3; ++a) {
-      char* p = s.room(2);
       if (a > 0 && spaces) *p++ = ' ';
-      *p++ = lower ? "xyz"[a] : "XYZ"[a];
-      s.commit(p);
-      append_number(s, program_value(a, cmd[a], g53), dec);
+      *p++ = letters[a];
+      const double v = program_value(a, cmd[a], g53);
+      if (char* end = nc::format_number_fast(v, dec, p)) {
+        p = end;
+      } else {
+        s.commit(p);
+        s.append(nc::format_number(v, dec));
+        p = s.room(kRoom);
+      }
     }
+    s.commit(p);
   }
   void end_line(char* p) {
     std::memcpy(p, line_ending_, 2);  // room for both was made; only the ending's length counts
