@@ -90,28 +90,6 @@ bool block_uses_spaces(const Block& b) {
   return b.words.size() <= 1;  // a single word: spaces by default
 }
 
-BlockStyle block_style(const Block& b) {
-  // The same answers as block_uses_lowercase and block_uses_spaces (word
-  // letters are ASCII: isalpha/islower are these comparisons in any locale
-  // for them).
-  BlockStyle st;
-  bool case_known = false, spaced = false;
-  const size_t n = b.words.size();
-  for (size_t k = 0; k < n; ++k) {
-    const Word& w = b.words[k];
-    if (!case_known) {
-      const char c = b.text[w.begin];
-      if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z')) {
-        case_known = true;
-        st.lowercase = c >= 'a';
-      }
-    }
-    if (k > 0 && w.begin > b.words[k - 1].end) spaced = true;
-  }
-  st.spaces = spaced || n <= 1;
-  return st;
-}
-
 namespace {
 // memcpy for the short pieces of a line (a word, the gap between words):
 // two overlapping word-sized moves instead of a library call.

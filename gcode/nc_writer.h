@@ -108,10 +108,5 @@ char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::s
 bool block_uses_lowercase(const Block& b);
 /// Whether the block separates words with spaces (else they are packed).
 bool block_uses_spaces(const Block& b);
-/// Both of the above in one pass over the words.
-struct BlockStyle {
-  bool lowercase = false, spaces = true;
-};
-BlockStyle block_style(const Block& b);
 
 }  // namespace volmap::nc

@@ -134,6 +134,8 @@ class ProgramPost {
   const Corrector& corrector() {
     const double L = interp_.state().tool_length_active ? interp_.state().tool_length_mm
                                                         : machine_.tool_length_mm;
+    // The same tool as the line before (almost always): no map search.
+    if (last_corrector_ && L == last_corrector_length_) return *last_corrector_;
     auto it = correctors_.find(L);
     if (it == correctors_.end()) {
       if (table_ && L != machine_.tool_length_mm)
@@ -147,6 +149,8 @@ class ProgramPost {
                                          : std::make_unique<Corrector>(machine_, errors_, L, options_.outside))
                .first;
     }
+    last_corrector_length_ = L;
+    last_corrector_ = it->second.get();  // map nodes stay put: the pointer stays valid
     return *it->second;
   }
   // How close a commanded point is to the exact solution of x + e(x) = p:
@@ -260,6 +264,9 @@ class ProgramPost {
   PostOptions options_;
   nc::Interpreter interp_;
   std::map<double, std::unique_ptr<Corrector>> correctors_;
+  const Corrector* last_corrector_ = nullptr;  ///< corrector()'s last answer, for this tool length:
+  double last_corrector_length_ = 0.0;
+  nc::BlockEffect fx_;  ///< the line's effect (storage reused line after line)
   PostReport report_;
   Vector3d emitted_mm_ = Vector3d::Zero();  ///< last commanded position written
   bool emitted_known_ = false;
@@ -521,7 +528,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   nc::lex_block_into(text, number, file_, block_);
   const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
-  nc::BlockEffect fx;
+  nc::BlockEffect& fx = fx_;
   interp_.execute(b, fx);
   if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();
@@ -551,9 +558,29 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     return;
   }
   const nc::Motion& m = fx.motion;
-  const nc::BlockStyle style = nc::block_style(b);
-  const bool lower = style.lowercase;
-  const bool spaces = style.spaces;
+  // One pass over the words: the indices of X, Y and Z (asked for again and
+  // again below), and the block's style, as nc::block_uses_lowercase (the
+  // case of the first letter, '@' and '^' have none) and
+  // nc::block_uses_spaces (a gap between two words; a lone word: spaces).
+  int axis_index[3] = {-1, -1, -1};
+  bool lower = false, case_known = false, spaced = false;
+  {
+    const size_t n = b.words.size();
+    std::uint32_t prev_end = 0;
+    for (size_t k = 0; k < n; ++k) {
+      const nc::Word& w = b.words[k];
+      const char L = w.letter;
+      if (L >= 'X' && L <= 'Z' && axis_index[L - 'X'] < 0) axis_index[L - 'X'] = static_cast<int>(k);
+      if (!case_known && L != '@' && L != '^') {
+        case_known = true;
+        lower = b.text[w.begin] >= 'a';
+      }
+      if (k > 0 && w.begin > prev_end) spaced = true;
+      prev_end = w.end;
+    }
+    spaced = spaced || n <= 1;
+  }
+  const bool spaces = spaced;
   const int dec = decimals();
   static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
   const double half_unit = dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
@@ -564,12 +591,6 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
       if (b.words[k].letter == L) return static_cast<int>(k);
     return -1;
   };
-  // Those of X, Y and Z, asked for again and again: found in one pass.
-  int axis_index[3] = {-1, -1, -1};
-  for (size_t k = b.words.size(); k-- > 0;) {
-    const char L = b.words[k].letter;
-    if (L >= 'X' && L <= 'Z') axis_index[L - 'X'] = static_cast<int>(k);  // the first one wins
-  }
   // Does axis a need a new word to command cmd? Compared with what the block
   // writes (or, for an absent word, with staying put).
   auto needs_word = [&](int a, const Vector3d& cmd) {
@@ -721,7 +742,10 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   const bool g93 = s.feed_mode == 930;
   if (g93)
     if (const int i = index_of('F'); i >= 0) remove[removed++] = i;
-  std::sort(remove.begin(), remove.begin() + static_cast<std::ptrdiff_t>(removed));
+  // Ascending, as apply_edit_to wants (insertion sort: a handful, nearly
+  // always in order already).
+  for (std::size_t r = 1; r < removed; ++r)
+    for (std::size_t q = r; q > 0 && remove[q - 1] > remove[q]; --q) std::swap(remove[q - 1], remove[q]);
   const bool g53 = fx.g53;
   // The words of a piece into w (storage reused: no allocation per line).
   auto words_for = [&](const Vector3d& cmd, double s0, double s1, CharBuffer& w) {
