@@ -1,6 +1,7 @@
 #include "gcode/nc_interpreter.h"
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -144,18 +145,24 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
 
   // Step 1 and 2: every word known; one G code per modal group, one M code
   // per group; no letter twice (except G and M).
-  std::array<const Word*, kGroupCount> g{};
-  std::array<const Word*, kMGroupCount> m{};
-  std::array<const Word*, 26> letter{};
+  // The slots are filled as the words come; only those a word filled are
+  // valid (the masks say which) until the general steps below null the
+  // others: clearing all 48 slots first would cost the common block more
+  // than everything else the interpreter does for it.
+  std::array<const Word*, kGroupCount> g;
+  std::array<const Word*, kMGroupCount> m;
+  std::array<const Word*, 26> letter;
   const Word* polar_radius = nullptr;  // @: LinuxCNC polar coordinates in the XY plane
   const Word* polar_angle = nullptr;   // ^: degrees, counter-clockwise from +X
   unsigned g_mask = 0, m_mask = 0;
+  std::uint32_t letter_mask = 0;  // bit L - 'A' for each letter of letter[] set
   for (const Word& w : b.words) {
     // Most words are plain letters (X Y Z F ...): one test sends them on.
     if (kPlainLetter[static_cast<unsigned char>(w.letter)]) {
       const size_t L = static_cast<size_t>(w.letter - 'A');
-      if (letter[L]) fail(b, &w, fmt::format("word {} appears twice in one block", w.letter));
+      if (letter_mask & (1u << L)) fail(b, &w, fmt::format("word {} appears twice in one block", w.letter));
       letter[L] = &w;
+      letter_mask |= 1u << L;
       continue;
     }
     if (w.letter == 'G') {
@@ -166,9 +173,10 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
                                 why ? why : "unknown G code"));
       if (g_mask & (1u << grp))
         fail(b, &w, "two G codes of the same modal group in one block; put them in separate blocks");
-      g_mask |= 1u << grp;
-      if (grp == kNonModal && g[kNonModal] && g[kNonModal]->code10 != w.code10)
+      // (A second non-modal code failed just above: the group's bit was set.)
+      if (grp == kNonModal && (g_mask & (1u << kNonModal)) && g[kNonModal]->code10 != w.code10)
         fail(b, &w, "two non-modal G codes in one block; split the block");
+      g_mask |= 1u << grp;
       g[static_cast<size_t>(grp)] = &w;
       continue;
     }
@@ -194,16 +202,77 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
                               "use a five-axis machine definition", L));
     if (L == 'D' || L == 'E')
       fail(b, &w, fmt::format("word {} is not supported (cutter compensation, lathe)", L));
-    if (L != 'N' && letter[static_cast<size_t>(L - 'A')])
+    if (L != 'N' && (letter_mask & (1u << (L - 'A'))))
       fail(b, &w, fmt::format("word {} appears twice in one block", L));
     letter[static_cast<size_t>(L - 'A')] = &w;
+    letter_mask |= 1u << (L - 'A');
   }
-  auto word = [&](char L) { return letter[static_cast<size_t>(L - 'A')]; };
+  // Until the general steps, a slot is read only when its bit is set.
+  auto given_word = [&](char L) -> const Word* {
+    const size_t k = static_cast<size_t>(L - 'A');
+    return (letter_mask & (1u << k)) ? letter[k] : nullptr;
+  };
   const bool polar = polar_radius || polar_angle;
-  const bool any_axis = word('X') || word('Y') || word('Z') || polar;
-  if (polar && (word('X') || word('Y')))
-    fail(b, word('X') ? word('X') : word('Y'),
+  if (polar && (given_word('X') || given_word('Y')))
+    fail(b, given_word('X') ? given_word('X') : given_word('Y'),
          "X or Y with polar coordinates (@ ^) in one block; use one form or the other");
+
+  // The block of most programs: axis words (and F) only, no G or M code, in
+  // G0 or G1. What the steps below do for it, and nothing else (they would
+  // test every modal group in vain): F, the end of a canned-cycle run, the
+  // straight move with its checks in the same order.
+  constexpr std::uint32_t kAxisLetters = 1u << ('X' - 'A') | 1u << ('Y' - 'A') | 1u << ('Z' - 'A');
+  constexpr std::uint32_t kFeedLetter = 1u << ('F' - 'A');
+  if (g_mask == 0 && m_mask == 0 && !polar && (letter_mask & ~(kAxisLetters | kFeedLetter)) == 0 &&
+      (letter_mask & kAxisLetters) != 0 && (s_.motion == 0 || s_.motion == 10)) {
+    if (const Word* f = given_word('F')) {
+      if (f->value < 0) fail(b, f, "negative feed");
+      s_.feed = f->value;
+    }
+    s_.cycle_il_known = false;  // not a cycle (as below)
+    const Eigen::Vector3d& wo = work_offset();
+    Eigen::Vector3d target = s_.position_mm;
+    std::array<bool, 3> given{};
+    for (int a = 0; a < 3; ++a) {
+      const Word* w = given_word("XYZ"[a]);
+      if (!w) continue;
+      given[static_cast<size_t>(a)] = true;
+      if (s_.absolute)
+        target[a] = w->value * s_.unit_mm + wo[a];
+      else
+        target[a] = s_.position_mm[a] + w->value * s_.unit_mm;
+    }
+    Motion& mo = effect.motion;
+    mo.start_mm = s_.position_mm;
+    mo.feed = s_.feed;
+    const int mode = s_.motion;
+    bool known_after = true;
+    for (int a = 0; a < 3; ++a)
+      known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] ||
+                                    (given[static_cast<size_t>(a)] && s_.absolute));
+    if (!known_after && mode != 0)
+      fail(b, nullptr, "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
+                       "before the first cutting move, or give --initial-position");
+    mo.kind = mode == 0 ? MotionKind::kRapid : MotionKind::kLinear;
+    if (mode == 10 && s_.feed <= 0.0 && s_.feed_mode != 930) fail(b, nullptr, "G1 with no feed rate; add an F word");
+    mo.end_mm = target;
+    effect.has_motion = true;
+    s_.position_mm = target;
+    for (int a = 0; a < 3; ++a)
+      if (given[static_cast<size_t>(a)] && s_.absolute) s_.axis_known[static_cast<size_t>(a)] = true;
+    s_.position_known = s_.axis_known[0] && s_.axis_known[1] && s_.axis_known[2];
+    return;
+  }
+
+  // The general steps read every slot: those no word filled are null.
+  for (size_t k = 0; k < letter.size(); ++k)
+    if (!(letter_mask & (1u << k))) letter[k] = nullptr;
+  for (size_t k = 0; k < g.size(); ++k)
+    if (!(g_mask & (1u << k))) g[k] = nullptr;
+  for (size_t k = 0; k < m.size(); ++k)
+    if (!(m_mask & (1u << k))) m[k] = nullptr;
+  auto word = [&](char L) { return letter[static_cast<size_t>(L - 'A')]; };
+  const bool any_axis = word('X') || word('Y') || word('Z') || polar;
 
   // Step 3 and 4: execute in RS274NGC order.
   if (g[kFeedMode]) s_.feed_mode = g[kFeedMode]->code10;
