@@ -27,7 +27,7 @@ constexpr bool is_word_letter(char upper) {
 enum CharClass : std::uint8_t { kOther = 0, kSpace, kDigit };
 struct CharTable {
   std::array<std::uint8_t, 256> cls{};
-  std::array<char, 256> upper{};  ///< the word letter a character begins (ASCII toupper), or 0
+  std::array<char, 256> upper{};  ///< the word letter a character begins (ASCII toupper), or 0 (and for O)
 };
 constexpr CharTable make_char_table() {
   CharTable t;
@@ -36,7 +36,9 @@ constexpr CharTable make_char_table() {
     if (ch == ' ' || ch == '\t' || ch == '\r') t.cls[static_cast<size_t>(c)] = kSpace;
     if (ch >= '0' && ch <= '9') t.cls[static_cast<size_t>(c)] = kDigit;
     const char up = ch >= 'a' && ch <= 'z' ? static_cast<char>(ch - 'a' + 'A') : ch;
-    if (c < 128 && is_word_letter(up)) t.upper[static_cast<size_t>(c)] = up;
+    // O is a letter of RS274NGC but begins control flow, refused with its
+    // own message: 0 here sends it to the lexer's rare branch.
+    if (c < 128 && is_word_letter(up) && up != 'O') t.upper[static_cast<size_t>(c)] = up;
   }
   return t;
 }
@@ -157,8 +159,8 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     skip_space();
     if (i >= n) break;
     const auto c = static_cast<unsigned char>(t[i]);
-    const char letter = kChars.upper[c];  // 0: not a word letter
-    if (letter == 0 || letter == 'O') {
+    const char letter = kChars.upper[c];  // 0: not a word letter, or O
+    if (letter == 0) {
       if (c == ';') break;  // comment to end of line
       if (c == '(') {
         const size_t close = text.find(')', i + 1);
@@ -172,13 +174,13 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       }
       if (c == '#') fail(file, line, i, kNoParameters);
       if (c == '[') fail(file, line, i, kNoExpressions);
-      if (letter == 'O')
+      if (c == 'O' || c == 'o')
         fail(file, line, i,
              "O-word control flow (subroutines, loops, conditionals) is not supported; "
              "expand it in CAM to a flat program");
       fail(file, line, i, std::string("unexpected character '") + static_cast<char>(c) + "'; not a G-code word");
     }
-    Word w;
+    Word& w = b.words.emplace_back();  // (on InputError the block is as far as it got)
     w.letter = letter;
     w.begin = static_cast<std::uint32_t>(i);
     ++i;
@@ -215,8 +217,9 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       // Spaces inside a number join its parts (RS274NGC): the general path.
       if (kChars.cls[static_cast<unsigned char>(t[after])] == kDigit || t[after] == '.') fast = false;
     }
-    // mantissa < 10^15: at most 15 significant digits, exact in a double.
-    bool exact = digits <= 19 && mantissa < 1000000000000000ull;
+    // mantissa < 10^15: at most 15 significant digits, exact in a double
+    // (at most 15 digits say so at once).
+    bool exact = digits <= 15 || (digits <= 19 && mantissa < 1000000000000000ull);
     std::string_view number;  // needed only when std::from_chars reads it
     if (fast) {
       number = std::string_view(t + i, k - i);
@@ -255,7 +258,6 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       // unknown code, refused by the interpreter) instead of overflowing int.
       if (std::abs(scaled - r) < 1e-6 && decimals <= 1 && v >= 0 && r < 1e6) w.code10 = static_cast<int>(r);
     }
-    b.words.push_back(w);
   }
 }
 
