@@ -167,6 +167,85 @@ TEST(NcWriterFast, FormatNumberEqualsFmt) {
   EXPECT_EQ(checked, 200000);
 }
 
+// format_number_fast against format_number's general path (fmt) where its
+// cases meet: k = value x 10^dec near 10^j (digit counts), near 1e8 (the
+// eight-digit form and the wide one), near 1e9 (the limit), every decimals.
+TEST(NcWriterFast, FormatNumberAtTheEdgesOfItsCases) {
+  auto general = [](double v, int dec) {
+    std::string s = fmt::format("{:.{}f}", v, dec);
+    if (s.find('.') != std::string::npos) {
+      while (s.back() == '0') s.pop_back();
+      if (s.back() == '.') s.pop_back();
+    }
+    return s == "-0" ? std::string("0") : s;
+  };
+  int written = 0;
+  for (int dec = 0; dec <= 9; ++dec) {
+    for (int j = 0; j <= 9; ++j) {
+      for (long long dk = -3; dk <= 3; ++dk) {
+        const long long k = static_cast<long long>(std::pow(10.0, j)) + dk;
+        if (k < 0) continue;
+        for (double frac : {0.0, 0.3, 0.7}) {
+          for (double sign : {1.0, -1.0}) {
+            const double v = sign * (static_cast<double>(k) + frac) / std::pow(10.0, dec);
+            char buf[nc::kNumberRoom];
+            if (const char* end = nc::format_number_fast(v, dec, buf)) {
+              ASSERT_EQ(std::string(buf, static_cast<size_t>(end - buf)), general(v, dec)) << v << " " << dec;
+              ++written;
+            }
+            ASSERT_EQ(nc::format_number(v, dec), general(v, dec)) << v << " " << dec;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(written, 2000);
+}
+
+// apply_edit_to (the post's in-place writer) writes what apply_edit does.
+TEST(NcWriterFast, ApplyEditToEqualsApplyEdit) {
+  std::mt19937_64 rng(9);
+  const char* forms[] = {"N10 G1 X1.5 Y-2 Z3 F100", "x1y2z3", "G1  X1\tY2 (c) Z3 ; end", "X1 Y2 Z3 ",
+                         "G2 X1 Y2 I3 J4", "/G0 X1", "M3 S1000", "Z-7.9882 Y0.2 X96"};
+  for (int trial = 0; trial < 5000; ++trial) {
+    const nc::Block b = nc::lex_block(forms[trial % 8], 1, "t.ngc");
+    nc::BlockEdit e;
+    for (size_t k = 0; k < b.words.size(); ++k)
+      if (rng() % 2) e.remove.push_back(static_cast<int>(k));
+    const char* inserts[] = {"", "X9 Y8 Z7", "g1 x1", "X1.2345"};
+    e.insert = inserts[rng() % 4];
+    std::string buf(b.text.size() + e.insert.size() + 1, '#');
+    char* end = nc::apply_edit_to(b, e.remove.data(), e.remove.size(), e.insert, nc::block_uses_spaces(b), buf.data());
+    ASSERT_LE(static_cast<size_t>(end - buf.data()), buf.size());
+    ASSERT_EQ(std::string(buf.data(), end), nc::apply_edit(b, e)) << forms[trial % 8] << " + " << e.insert;
+  }
+}
+
+// The lexer's fast path records what the general one does: spans, decimals
+// and values of words whatever follows them.
+TEST(NcBlockFast, SpansAndDecimalsOfEveryForm) {
+  struct Case {
+    const char* text;
+    double value;
+    int decimals;
+    unsigned begin, end;
+  };
+  const Case cases[] = {{"X96.0000 Y1", 96, 4, 0, 8},  {"X-7.9882", -7.9882, 4, 0, 8}, {"x.5", 0.5, 1, 0, 3},
+                        {"X5.(c)", 5, 0, 0, 3},        {"X +5 Y1", 5, 0, 0, 4},        {"X1 2.5", 12.5, 1, 0, 6},
+                        {"X1 .5", 1.5, 1, 0, 5},       {"X1.2 Y3", 1.2, 1, 0, 4},       {"X12345678.5", 12345678.5, 1, 0, 11},
+                        {"X1\t", 1, 0, 0, 2},          {"X-0", -0.0, 0, 0, 3},         {"X007", 7, 0, 0, 4}};
+  for (const Case& c : cases) {
+    const nc::Block b = nc::lex_block(c.text, 1, "t.ngc");
+    ASSERT_GE(b.words.size(), 1u) << c.text;
+    EXPECT_EQ(b.words[0].value, c.value) << c.text;
+    EXPECT_EQ(std::signbit(b.words[0].value), std::signbit(c.value)) << c.text;
+    EXPECT_EQ(b.words[0].decimals, c.decimals) << c.text;
+    EXPECT_EQ(b.words[0].begin, c.begin) << c.text;
+    EXPECT_EQ(b.words[0].end, c.end) << c.text;
+    EXPECT_EQ(b.text, c.text);
+  }
+}
+
 // The lexer's one-pass decimal parser gives std::from_chars's value, bit for
 // bit: signs, leading zeros, no integer part, spaces inside, 1 to 25 digits.
 TEST(NcBlockFast, NumbersEqualFromChars) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -124,6 +125,73 @@ TEST(NcInterpreter, PolarCoordinatesAsLinuxCncReadsThem) {
   for (int k = 0; k < 6; ++k) {
     in.execute(nc::lex_block(lines[k], k + 1, "p.ngc"), fx);
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(in.state().position_mm[a], want[k][a], 1e-12) << lines[k];
+  }
+}
+
+// The interpreter's short way for the common block (X Y Z and F only)
+// leaves the same state and effect as the general steps, errors included:
+// the same blocks with an N word (which changes nothing) take the general
+// steps.
+TEST(NcInterpreter, CommonBlockAsTheGeneralSteps) {
+  std::mt19937 rng(3);
+  for (int run = 0; run < 40; ++run) {
+    nc::ProgramSetup setup = offset_setup(100, 50, 20);
+    if (run % 3 == 0) setup.initial_position_mm = Eigen::Vector3d(1, 2, 3);
+    nc::Interpreter plain(setup, "p.ngc"), general(setup, "p.ngc");
+    std::uniform_real_distribution<double> u(-50, 50);
+    for (int k = 0; k < 60; ++k) {
+      std::string words;
+      const int pick = static_cast<int>(rng() % 16);
+      if (pick == 0) {
+        words = rng() % 2 ? "G90" : "G91";
+      } else if (pick == 1) {
+        words = rng() % 2 ? "G0" : "G1";
+      } else if (pick == 2) {
+        words = rng() % 2 ? "G20" : "G21";
+      } else {
+        for (char L : {'X', 'Y', 'Z'})
+          if (rng() % 2) words += fmt::format("{}{:.3f} ", L, u(rng));
+        if (rng() % 4 == 0) words += fmt::format("F{:.1f}", rng() % 5 == 0 ? -1.0 : 100.0 * (rng() % 3));
+        if (words.empty()) words = "X1";
+      }
+      std::string err_plain, err_general;
+      nc::BlockEffect fx_plain, fx_general;
+      try {
+        plain.execute(nc::lex_block(words, k + 1, "p.ngc"), fx_plain);
+      } catch (const InputError& e) {
+        err_plain = e.what();
+      }
+      try {
+        general.execute(nc::lex_block("N1 " + words, k + 1, "p.ngc"), fx_general);
+      } catch (const InputError& e) {
+        err_general = e.what();
+      }
+      // The same message; a column counts the N word's three characters more.
+      auto message = [](const std::string& m) { return m.substr(m.find(' ') == std::string::npos ? 0 : m.find(' ')); };
+      ASSERT_EQ(message(err_plain), message(err_general)) << words;
+      const nc::State &a = plain.state(), &b = general.state();
+      ASSERT_EQ(a.position_mm, b.position_mm) << words;
+      ASSERT_EQ(a.axis_known, b.axis_known) << words;
+      ASSERT_EQ(a.position_known, b.position_known) << words;
+      ASSERT_EQ(a.feed, b.feed) << words;
+      ASSERT_EQ(a.cycle_il_known, b.cycle_il_known) << words;
+      ASSERT_EQ(a.motion, b.motion) << words;
+      if (!err_plain.empty()) continue;
+      ASSERT_EQ(fx_plain.has_motion, fx_general.has_motion) << words;
+      ASSERT_EQ(fx_plain.motion_code, fx_general.motion_code) << words;
+      ASSERT_EQ(fx_plain.g53, fx_general.g53) << words;
+      ASSERT_EQ(fx_plain.stop_code, fx_general.stop_code) << words;
+      ASSERT_EQ(fx_plain.more_holes.size(), fx_general.more_holes.size()) << words;
+      const nc::Motion &p = fx_plain.motion, &q = fx_general.motion;
+      ASSERT_EQ(p.kind, q.kind) << words;
+      ASSERT_EQ(p.start_mm, q.start_mm) << words;
+      ASSERT_EQ(p.end_mm, q.end_mm) << words;
+      ASSERT_EQ(p.center_mm, q.center_mm) << words;
+      ASSERT_EQ(p.feed, q.feed) << words;
+      ASSERT_EQ(p.r_mm, q.r_mm) << words;
+      ASSERT_EQ(p.clear_mm, q.clear_mm) << words;
+      ASSERT_EQ(p.plane, q.plane) << words;
+    }
   }
 }
 
