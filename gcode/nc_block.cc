@@ -211,22 +211,25 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       digits += k - frac_begin;
     }
     bool fast = digits > 0;
+    size_t next = k;  // where the line goes on: past the spaces after the number
     if (fast && kChars.cls[static_cast<unsigned char>(t[k])] == kSpace) {
-      size_t after = k + 1;
-      while (kChars.cls[static_cast<unsigned char>(t[after])] == kSpace) ++after;
+      ++next;
+      while (kChars.cls[static_cast<unsigned char>(t[next])] == kSpace) ++next;
       // Spaces inside a number join its parts (RS274NGC): the general path.
-      if (kChars.cls[static_cast<unsigned char>(t[after])] == kDigit || t[after] == '.') fast = false;
+      if (kChars.cls[static_cast<unsigned char>(t[next])] == kDigit || t[next] == '.') fast = false;
     }
     // mantissa < 10^15: at most 15 significant digits, exact in a double
     // (at most 15 digits say so at once).
     bool exact = digits <= 15 || (digits <= 19 && mantissa < 1000000000000000ull);
     std::string_view number;  // needed only when std::from_chars reads it
+    size_t end;  // of the word
     if (fast) {
       number = std::string_view(t + i, k - i);
-      i = k;
+      end = k;
+      i = next;  // (the spaces are not looked at again)
     } else {
       const GeneralNumber g = read_number_general(text, line, file, i, spaced);
-      i = g.end;
+      end = i = g.end;
       number = g.number;
       mantissa = g.mantissa;
       decimals = g.decimals;
@@ -240,7 +243,8 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     if (exact && decimals <= 22) {
       // Exact: an integer below 2^53 over an exact power of ten, one
       // correctly rounded division (Clinger), as std::from_chars gives.
-      const double r = static_cast<double>(mantissa) / kPow10[decimals];
+      // (Below 2^63: the signed conversion, one instruction.)
+      const double r = static_cast<double>(static_cast<std::int64_t>(mantissa)) / kPow10[decimals];
       v = negative ? -r : r;
     } else {  // more digits: std::from_chars decides
       const char* first = number.data() + (number[0] == '+' ? 1 : 0);
@@ -250,7 +254,7 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     }
     w.value = v;
     w.decimals = decimals;
-    w.end = static_cast<std::uint32_t>(i);
+    w.end = static_cast<std::uint32_t>(end);
     if (letter == 'G' || letter == 'M') {
       const double scaled = v * 10.0;
       const double r = std::round(scaled);
