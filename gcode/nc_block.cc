@@ -85,62 +85,107 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     w.letter = letter;
     w.begin = static_cast<std::uint32_t>(i);
     ++i;
-    {
-      size_t k = i;
-      while (k < n && is_space(text[k])) ++k;
-      if (k < n && text[k] == '#')
-        fail(file, line, k,
-             "# parameters are not supported: the post-processor needs literal numbers; "
-             "expand parameters in CAM (or with LinuxCNC's interpreter) first");
-      if (k < n && text[k] == '[')
-        fail(file, line, k, "[ ] expressions are not supported; output literal numbers from CAM");
-    }
     // The number: sign, digits, point; spaces allowed between its characters
     // (collected into `number` only when there are such spaces).
     std::string_view number;
     std::string spaced;
-    size_t first_char = i;
-    bool contiguous = true;
     size_t last = i;
-    bool seen_point = false;
     int decimals = 0;
     // The value as the digits go by: mantissa, significant digits, sign.
     std::uint64_t mantissa = 0;
     int significant = 0;
     bool negative = false;
-    while (i < n) {
-      const char d = text[i];
-      if (is_space(d)) {
-        ++i;
-        continue;
+    // Fast path, the form CAM writes: [sign] digits [. digits] right after
+    // the letter, not continued after spaces by a digit or a point. One pass,
+    // the same digits, counts and value as the general loop below.
+    bool fast = false;
+    {
+      size_t k = i;
+      if (k < n && (text[k] == '-' || text[k] == '+')) negative = text[k++] == '-';
+      const size_t int_begin = k;
+      unsigned d;
+      while (k < n && (d = static_cast<unsigned char>(text[k]) - '0') <= 9) {
+        mantissa = mantissa * 10 + d;
+        ++k;
       }
-      const bool sign = (d == '+' || d == '-') && last == first_char;
-      if ((d >= '0' && d <= '9') || sign || (d == '.' && !seen_point)) {
-        if (d == '.') {
-          seen_point = true;
-        } else if (d == '-' || d == '+') {
-          negative = d == '-';
-        } else {
-          if (seen_point) ++decimals;
-          if (mantissa != 0 || d != '0') ++significant;
-          mantissa = mantissa * 10 + static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
+      size_t digits = k - int_begin;
+      if (k < n && text[k] == '.') {
+        const size_t frac_begin = ++k;
+        while (k < n && (d = static_cast<unsigned char>(text[k]) - '0') <= 9) {
+          mantissa = mantissa * 10 + d;
+          ++k;
         }
-        if (last == first_char) {
-          first_char = i;  // spaces before the number: it starts here
-        } else if (contiguous && i != last) {  // spaces inside the number: collect it
-          contiguous = false;
-          spaced.assign(text.substr(first_char, last - first_char));
-          std::erase_if(spaced, is_space);
-        }
-        if (!contiguous) spaced += d;
-        ++i;
-        last = i;
-        continue;
+        decimals = static_cast<int>(k - frac_begin);
+        digits += k - frac_begin;
       }
-      break;
+      // `significant` only decides whether the mantissa is exact (below
+      // 2^53) for the one-division value below; with at most 19 digits the
+      // mantissa has not wrapped, and it tells that directly.
+      significant = digits <= 19 && mantissa < (std::uint64_t{1} << 53) ? 0 : 99;
+      size_t after = k;
+      while (after < n && is_space(text[after])) ++after;
+      const bool continues =
+          after > k && after < n && ((text[after] >= '0' && text[after] <= '9') || text[after] == '.');
+      if (digits > 0 && !continues) {
+        fast = true;
+        number = text.substr(i, k - i);
+        last = k;
+        i = k;
+      } else {
+        decimals = 0;
+        mantissa = 0;
+        significant = 0;
+        negative = false;
+      }
     }
-    i = last;
-    number = contiguous ? text.substr(first_char, last - first_char) : std::string_view(spaced);
+    if (!fast) {
+      {
+        size_t k = i;
+        while (k < n && is_space(text[k])) ++k;
+        if (k < n && text[k] == '#')
+          fail(file, line, k,
+               "# parameters are not supported: the post-processor needs literal numbers; "
+               "expand parameters in CAM (or with LinuxCNC's interpreter) first");
+        if (k < n && text[k] == '[')
+          fail(file, line, k, "[ ] expressions are not supported; output literal numbers from CAM");
+      }
+      size_t first_char = i;
+      bool contiguous = true;
+      bool seen_point = false;
+      while (i < n) {
+        const char d = text[i];
+        if (is_space(d)) {
+          ++i;
+          continue;
+        }
+        const bool sign = (d == '+' || d == '-') && last == first_char;
+        if ((d >= '0' && d <= '9') || sign || (d == '.' && !seen_point)) {
+          if (d == '.') {
+            seen_point = true;
+          } else if (d == '-' || d == '+') {
+            negative = d == '-';
+          } else {
+            if (seen_point) ++decimals;
+            if (mantissa != 0 || d != '0') ++significant;
+            mantissa = mantissa * 10 + static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
+          }
+          if (last == first_char) {
+            first_char = i;  // spaces before the number: it starts here
+          } else if (contiguous && i != last) {  // spaces inside the number: collect it
+            contiguous = false;
+            spaced.assign(text.substr(first_char, last - first_char));
+            std::erase_if(spaced, is_space);
+          }
+          if (!contiguous) spaced += d;
+          ++i;
+          last = i;
+          continue;
+        }
+        break;
+      }
+      i = last;
+      number = contiguous ? text.substr(first_char, last - first_char) : std::string_view(spaced);
+    }
     if (number.empty() || number == "+" || number == "-" || number == "." ||
         number == "+." || number == "-.")
       fail(file, line, w.begin, std::string("word '") + letter + "' has no number");

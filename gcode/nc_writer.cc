@@ -21,43 +21,64 @@ bool format_fixed_fast(double value, int decimals, std::string& s) {
   if (decimals < 0 || decimals > 9) return false;
   const double scaled = std::abs(value) * kPow10[decimals];
   if (!(scaled < 1e9)) return false;  // NaN, infinities and large values too
-  const double r = std::floor(scaled + 0.5);
-  if (std::abs(std::abs(scaled - r) - 0.5) < 1e-6) return false;
-  auto k = static_cast<std::uint64_t>(r);
-  char buf[32];
+  // floor(scaled + 0.5) by truncation (scaled >= 0; std::floor is a call
+  // without SSE4.1).
+  auto k = static_cast<std::uint32_t>(scaled + 0.5);  // below 1e9
+  if (std::abs(std::abs(scaled - static_cast<double>(k)) - 0.5) < 1e-6) return false;
+  char buf[24];
   char* end = buf + sizeof buf;
   char* p = end;
+  // Fraction digits, trailing zeros dropped: skip them first, then the rest.
   int d = 0;
-  // Fraction digits, trailing zeros dropped.
-  bool any = false;
-  for (; d < decimals; ++d) {
-    const char digit = static_cast<char>('0' + k % 10);
+  while (d < decimals && k % 10 == 0) {
     k /= 10;
-    if (!any && digit == '0') continue;
-    any = true;
-    *--p = digit;
+    ++d;
   }
-  if (any) *--p = '.';
-  do {
+  const bool any = d < decimals;
+  for (; d < decimals; ++d) {
     *--p = static_cast<char>('0' + k % 10);
     k /= 10;
-  } while (k != 0);
+  }
+  if (any) *--p = '.';
+  // Integer digits two at a time.
+  static constexpr char kPairs[] =
+      "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+      "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+      "8081828384858687888990919293949596979899";
+  while (k >= 10) {
+    const std::uint32_t q = k / 100, two = k - q * 100;
+    if (k < 100) {
+      *--p = kPairs[2 * two + 1];
+      *--p = kPairs[2 * two];
+      k = 0;
+      break;
+    }
+    *--p = kPairs[2 * two + 1];
+    *--p = kPairs[2 * two];
+    k = q;
+  }
+  if (k != 0 || p[0] == '.' || p == end) *--p = static_cast<char>('0' + k);
   const bool zero = !any && p[0] == '0' && p + 1 == end;
   if (value < 0 && !zero) *--p = '-';
-  s.assign(p, static_cast<std::size_t>(end - p));
+  s.append(p, static_cast<std::size_t>(end - p));
   return true;
 }
 }  // namespace
 
-std::string format_number(double value, int decimals) {
-  std::string s;
-  if (format_fixed_fast(value, decimals, s)) return s;
-  s = fmt::format("{:.{}f}", value, decimals);
+void append_number(std::string& out, double value, int decimals) {
+  if (format_fixed_fast(value, decimals, out)) return;
+  std::string s = fmt::format("{:.{}f}", value, decimals);
   if (s.find('.') != std::string::npos) {
     while (s.back() == '0') s.pop_back();
     if (s.back() == '.') s.pop_back();
   }
   if (s == "-0") s = "0";
+  out += s;
+}
+
+std::string format_number(double value, int decimals) {
+  std::string s;
+  append_number(s, value, decimals);
   return s;
 }
 

@@ -12,6 +12,8 @@ namespace volmap::nc {
 /// Fixed `decimals`, trailing zeros and a trailing point removed, never
 /// "-0": 12.5 -> "12.5", 3.0 -> "3", -0.00001 (4 decimals) -> "0".
 std::string format_number(double value, int decimals);
+/// The same appended to `out` (no string of its own: the writer's hot path).
+void append_number(std::string& out, double value, int decimals);
 
 /// An edit of one block: words to delete (indices into Block::words) and
 /// text to put at the place of the first deleted word (or, with none

@@ -178,7 +178,7 @@ class ProgramPost {
     for (int a = 0; a < 3; ++a) {
       if (s.size() > start && spaces) s += ' ';
       s += lower ? "xyz"[a] : "XYZ"[a];
-      s += nc::format_number(program_value(a, cmd[a], g53), decimals());
+      nc::append_number(s, program_value(a, cmd[a], g53), decimals());
     }
   }
   void emit(std::string_view text) {

@@ -3,6 +3,8 @@
 // hand, refusals of unsupported constructs with file:line, and the modes
 // (inch, incremental, work offsets, tool length, canned cycles).
 #include <cmath>
+#include <random>
+#include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -62,6 +64,40 @@ TEST(NcBlock, KeepsSpansAndScalesCodes) {
   EXPECT_EQ(b.text.substr(b.words[2].begin, b.words[2].end - b.words[2].begin), "x 1 0.5");
   EXPECT_EQ(b.words[4].code10, 382);
   EXPECT_EQ(b.comment, "comment");
+}
+
+// Every number the lexer reads equals the correctly rounded value of its
+// digits (std::from_chars), with its decimals and span, whatever follows it
+// (the fast path for CAM's plain numbers and the general one agree).
+TEST(NcBlock, NumbersReadAsTheirCorrectlyRoundedValue) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> len(0, 8), digit(0, 9), pick(0, 6);
+  const char* tails[] = {"", " ", " Y1", "Y1", "(c)", " ;x", "\t"};
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::string num = pick(rng) == 0 ? "-" : pick(rng) == 0 ? "+" : "";
+    const int int_digits = len(rng), frac_digits = len(rng) % 7;
+    for (int k = 0; k < int_digits; ++k) num += static_cast<char>('0' + digit(rng));
+    const bool point = frac_digits > 0 || pick(rng) == 0;
+    if (point) num += '.';
+    for (int k = 0; k < frac_digits; ++k) num += static_cast<char>('0' + digit(rng));
+    if (int_digits + frac_digits == 0) num += '7';
+    const std::string text = "X" + num + tails[trial % 7];
+    const nc::Block b = nc::lex_block(text, 1, "n.ngc");
+    ASSERT_GE(b.words.size(), 1u) << text;
+    const nc::Word& w = b.words[0];
+    double want = 0;
+    const char* first = num.data() + (num[0] == '+' ? 1 : 0);
+    std::from_chars(first, num.data() + num.size(), want);
+    EXPECT_EQ(w.value, want) << text;
+    EXPECT_EQ(std::signbit(w.value), num[0] == '-') << text;
+    EXPECT_EQ(w.end, 1 + num.size()) << text;
+    const size_t dot = num.find('.');
+    EXPECT_EQ(w.decimals, dot == std::string::npos ? 0 : static_cast<int>(num.size() - dot - 1)) << text;
+  }
+  // Spaces inside a number join its parts (RS274NGC); a second point ends it.
+  EXPECT_EQ(nc::lex_block("X 1 2.5 Y3", 1, "n.ngc").words[0].value, 12.5);
+  EXPECT_EQ(nc::lex_block("X1 .5", 1, "n.ngc").words[0].value, 1.5);
+  EXPECT_THROW(nc::lex_block("X1.2.3", 1, "n.ngc"), InputError);
 }
 
 TEST(NcBlock, RefusesWhatItDoesNotRead) {
