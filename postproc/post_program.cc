@@ -631,11 +631,16 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     }
   }
   const nc::State& s = interp_.state();
-  const double length = nc::path_length_mm(m);
-  auto g93_feed = [&](double s0, double s1) {
-    // Inverse time: the piece takes its share of the block's time.
-    const double share = std::max(1e-12, s1 - s0);
-    return nc::format_number(s.feed / share, 4);
+  auto g93_feed = [&](double s0, double s1, double step_mm) {
+    // Inverse time: the piece takes its share of the block's time. A
+    // take-up step at a reversal covers no nominal path: it takes the time
+    // of its own length at the block's nominal speed.
+    double share = s1 - s0;
+    if (share < 1e-9) {
+      const double length = nc::path_length_mm(m);
+      share = length > 0 ? step_mm / length : 0.0;
+    }
+    return nc::format_number(s.feed / std::max(1e-12, share), 4);
   };
   // The block itself becomes the first piece.
   nc::BlockEdit& edit = edit_;
@@ -662,7 +667,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     if (g93) {
       if (spaces) w += ' ';
       w += lower ? 'f' : 'F';
-      w += g93_feed(s0, s1);
+      w += g93_feed(s0, s1, (cmd - emitted_mm_).norm());
     }
   };
   if (!insert.empty() && spaces) insert += ' ';
@@ -690,7 +695,6 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     emitted_mm_ = reached(pieces[k].command_mm, g53);
   }
   emitted_known_ = true;
-  (void)length;
 }
 
 }  // namespace

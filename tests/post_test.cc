@@ -330,6 +330,32 @@ TEST(PostIncremental, RoundingsOfIncrementsDoNotAddUp) {
   EXPECT_LE(r.after.max_um, 1.0 + 0.09) << "worst at line " << r.after.worst_line;
 }
 
+// Under G93 (inverse time) every piece carries its F: the pieces of a block
+// share its time, and a lost-motion take-up step (no nominal path) takes the
+// time of its own length at the block's speed, not an absurd F.
+TEST(PostInverseTime, PiecesShareTheBlocksTimeAndStepsGetASensibleFeed) {
+  const std::string program = "G21 G90 G17\nG0 X10 Y10 Z10\nG93 G1 X100 Y10 Z10 F2\nX20 Y12 F2\nX110 F1\nG94\nM2\n";
+  const std::string out = post(program, hsu_errors(), offset_setup(150, 100, 100));
+  double minutes_in = 0.5 + 0.5 + 1.0, minutes_out = 0.0;
+  int steps = 0;
+  std::istringstream lines(out);
+  std::string l;
+  bool g93 = false;
+  while (std::getline(lines, l)) {
+    if (l.find("G93") != std::string::npos) g93 = true;
+    if (l.find("G94") != std::string::npos) g93 = false;
+    const size_t f = l.find('F');
+    if (!g93 || f == std::string::npos) continue;
+    const double F = std::strtod(l.c_str() + f + 1, nullptr);
+    ASSERT_GT(F, 0.0) << l;
+    EXPECT_LT(F, 1e6) << l;  // 3 um at 180 mm/min: F 6e4
+    if (F > 100) ++steps;
+    minutes_out += 1.0 / F;
+  }
+  EXPECT_GE(steps, 1);  // the reversals of X at lines 4 and 5
+  EXPECT_NEAR(minutes_out, minutes_in, 1e-3);
+}
+
 // post --table (cli.md): the table's interpolated tool-tip error stands for
 // the model. Checked against the model itself: the real machine simulated
 // from the errors runs the table-posted program within the tolerance plus
