@@ -57,7 +57,7 @@ bool format_fixed_fast(double value, int decimals, std::string& s) {
     *--p = kPairs[2 * two];
     k = q;
   }
-  if (k != 0 || p[0] == '.' || p == end) *--p = static_cast<char>('0' + k);
+  if (k != 0 || p == end || p[0] == '.') *--p = static_cast<char>('0' + k);
   const bool zero = !any && p[0] == '0' && p + 1 == end;
   if (value < 0 && !zero) *--p = '-';
   s.append(p, static_cast<std::size_t>(end - p));
