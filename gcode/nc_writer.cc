@@ -61,6 +61,14 @@ char* detail::format_fixed_wide(double value, int decimals, std::uint32_t k, cha
   return p;
 }
 
+void append_number(std::string& out, double value, int decimals) {
+  char buf[kNumberRoom];
+  if (const char* end = format_number_fast(value, decimals, buf))
+    out.append(buf, static_cast<std::size_t>(end - buf));
+  else
+    out += format_number(value, decimals);
+}
+
 std::string format_number(double value, int decimals) {
   char buf[kNumberRoom];
   if (const char* end = format_number_fast(value, decimals, buf)) return std::string(buf, static_cast<std::size_t>(end - buf));

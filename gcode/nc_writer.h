@@ -17,6 +17,8 @@ namespace volmap::nc {
 /// Fixed `decimals`, trailing zeros and a trailing point removed, never
 /// "-0": 12.5 -> "12.5", 3.0 -> "3", -0.00001 (4 decimals) -> "0".
 std::string format_number(double value, int decimals);
+/// The same appended to `out` (no string of its own).
+void append_number(std::string& out, double value, int decimals);
 /// Room format_number_fast needs at its output pointer.
 inline constexpr std::size_t kNumberRoom = 24;
 

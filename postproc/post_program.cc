@@ -193,6 +193,14 @@ class ProgramPost {
   const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
   void cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower, bool spaces,
                    int dec);
+  void expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower, bool spaces,
+                    int dec);
+  /// A G0 from nominal point `from` to `to` (corrected at its end), written as a line.
+  void expanded_rapid(const Corrector& c, const Vector3d& from, const Vector3d& to, bool lower, bool spaces);
+  /// A feed move from where the tool is (nominally `from`) to `to`, segmented
+  /// within tolerance, written as G1 lines.
+  void expanded_feed(const Corrector& c, const Vector3d& from, const Vector3d& to, bool lower, bool spaces);
+  double cycle_dwell_s_ = 0.0;  ///< P of G82/G89, modal as in LinuxCNC
   /// The program value the controller reads from a number written with
   /// `dec` decimals (what format_number writes, read back).
   /// The controller's initial level of the run of cycle blocks (LinuxCNC's
@@ -214,6 +222,31 @@ class ProgramPost {
     Vector3d r;
     for (int a = 0; a < 3; ++a) r[a] = emitted_mm_[a] + written(program_value(a, cmd[a], g53), decimals()) * st.unit_mm;
     return r;
+  }
+  /// The command of a positioning move (a rapid, or the traverse over a
+  /// hole and down) from nominal `from` to `to`, and its approach directions
+  /// in *d: an axis the nominal move moves takes its direction; one it does
+  /// not move but the correction makes creep takes the creep's direction, so
+  /// the command takes up its play that way (as segment() does for feed
+  /// moves) instead of leaving it half taken up; `z_down` fixes Z to -1 (a
+  /// cycle's feed into the hole).
+  Vector3d position_command(const Corrector& c, const Vector3d& from, const Vector3d& to, bool z_down,
+                            ApproachDirections& d) {
+    d = directions_of(from, to, last_dir_);
+    if (z_down) d[2] = -1;
+    Vector3d cmd = command(c, to, d);
+    if (emitted_known_) {
+      ApproachDirections settled = d;
+      Vector3d to_flat = to, from_flat = from;
+      if (z_down) from_flat.z() = to_flat.z() = 0.0;  // Z's direction is the feed's
+      if (settle_directions(emitted_mm_, cmd, from_flat, to_flat, settled)) {
+        const bool again = !c.same_error(d, settled);
+        d = settled;
+        if (again) cmd = command(c, to, d);
+      }
+    }
+    last_dir_ = d;
+    return cmd;
   }
   bool ctrl_il_known_ = false;
   double ctrl_il_mm_ = 0.0;
@@ -285,6 +318,7 @@ class ProgramPost {
   std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
   std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
   CharBuffer words_, previous_words_, insert_;  ///< scratch of the writer (storage reused)
+  CharBuffer expanded_line_;  ///< a line of an expanded cycle (storage reused)
   /// The last point corrected: command solves command + e(command, dir) =
   /// nominal (to solve_accuracy_mm()).
   struct LastCorrected {
@@ -467,10 +501,8 @@ void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, con
   for (size_t k = 0; k < holes; ++k) {
     const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[k - 1];
     // The traverse over the hole sets X and Y's approach; the feed goes down.
-    ApproachDirections d = directions_of(emitted_mm_, h.end_mm, last_dir_);
-    d[2] = -1;
-    last_dir_ = d;
-    const Vector3d cmd = command(c, h.end_mm, d);
+    ApproachDirections d;
+    const Vector3d cmd = position_command(c, h.start_mm, h.end_mm, true, d);
     const Vector3d r_cmd = command(c, Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm), d);
     double x, y, r, z;  // the words
     Vector3d at;        // where the controller takes them to: over the hole, at R
@@ -513,6 +545,102 @@ void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, con
     emitted_mm_ = Vector3d(at.x(), at.y(), s.g98 ? std::max(ctrl_il_mm_, at.z()) : at.z());
   }
   emitted_known_ = true;
+}
+
+// --expand-cycles: a cycle block (every hole of it) becomes its moves, as
+// LinuxCNC makes them (interp_cycles.cc): up to R if below it, over the hole
+// at the clearance level (the first hole: at the level the tool is at, if
+// higher than R), down to R, the feed to the bottom, a dwell for G82 G89,
+// out at feed to R for G85 G89, then to the clearance level. The block's
+// other words (N, F, S, M...) stay on its line, with the cycle's G code,
+// X Y Z R L P Q and polar words removed; the moves follow it.
+void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
+                               bool spaces, int dec) {
+  const nc::State& s = interp_.state();
+  const int code = s.motion;
+  if (code != 810 && code != 820 && code != 850 && code != 890)
+    throw InputError(file_, current_line_,
+                     fmt::format("--expand-cycles writes out G81 G82 G85 G89 only; this is G{}; post it without "
+                                 "--expand-cycles (its hole bottom and R plane are corrected)",
+                                 code / 10));
+  if (s.feed_mode == 930)
+    throw InputError(file_, current_line_, "--expand-cycles under inverse time feed (G93): use G94 for the cycles");
+  if (const nc::Word* p = b.find('P')) cycle_dwell_s_ = p->value;
+  nc::BlockEdit edit;
+  for (size_t i = 0; i < b.words.size(); ++i) {
+    const nc::Word& w = b.words[i];
+    const char L = w.letter;
+    if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == 'P' || L == 'Q' || L == '@' || L == '^' ||
+        (L == 'G' && w.code10 == code))
+      edit.remove.push_back(static_cast<int>(i));
+  }
+  const std::string rest = nc::apply_edit(b, edit);
+  bool blank = true;
+  for (char ch : rest) blank = blank && (ch == ' ' || ch == '\t');
+  if (!blank) emit(rest);
+  ++report_.lines_changed;
+  const size_t holes = 1 + fx.more_holes.size();
+  Vector3d at = fx.motion.start_mm;  // nominal position of the tool
+  for (size_t k = 0; k < holes; ++k) {
+    const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[k - 1];
+    const double x = h.end_mm.x(), y = h.end_mm.y();
+    auto rapid_to = [&](const Vector3d& to) {
+      expanded_rapid(c, at, to, lower, spaces);
+      at = to;
+    };
+    if (at.z() < h.r_mm) rapid_to(Vector3d(at.x(), at.y(), h.r_mm));
+    rapid_to(Vector3d(x, y, k == 0 ? at.z() : h.clear_mm));
+    if (at.z() > h.r_mm) rapid_to(Vector3d(x, y, h.r_mm));
+    const Vector3d bottom(x, y, h.end_mm.z());
+    expanded_feed(c, at, bottom, lower, spaces);
+    at = bottom;
+    if (code == 820 || code == 890) {
+      std::string dwell = lower ? "g4" : "G4";
+      if (spaces) dwell += ' ';
+      dwell += lower ? 'p' : 'P';
+      dwell += nc::format_number(cycle_dwell_s_, std::max(dec, 3));
+      emit(dwell);
+      ++report_.lines_added;
+    }
+    if (code == 850 || code == 890) {
+      const Vector3d r_level(x, y, h.r_mm);
+      expanded_feed(c, at, r_level, lower, spaces);
+      at = r_level;
+    }
+    if (h.clear_mm != at.z()) rapid_to(Vector3d(x, y, h.clear_mm));
+  }
+}
+
+void ProgramPost::expanded_rapid(const Corrector& c, const Vector3d& from, const Vector3d& to, bool lower,
+                                 bool spaces) {
+  ApproachDirections d;
+  const Vector3d cmd = position_command(c, from, to, false, d);
+  CharBuffer& l = expanded_line_;
+  l.assign(lower ? "g0" : "G0");
+  if (spaces) l.append(" ");
+  append_axis_words(cmd, false, lower, spaces, l);
+  emit(l.view());
+  ++report_.lines_added;
+  emitted_mm_ = reached(cmd, false);
+}
+
+void ProgramPost::expanded_feed(const Corrector& c, const Vector3d& from, const Vector3d& to, bool lower,
+                                bool spaces) {
+  nc::Motion m;
+  m.kind = nc::MotionKind::kLinear;
+  m.start_mm = from;
+  m.end_mm = to;
+  m.feed = interp_.state().feed;
+  const std::vector<Piece>& pieces = segment(c, m, emitted_mm_);
+  for (const Piece& piece : pieces) {
+    CharBuffer& l = expanded_line_;
+    l.assign(lower ? "g1" : "G1");
+    if (spaces) l.append(" ");
+    append_axis_words(piece.command_mm, false, lower, spaces, l);
+    emit(l.view());
+    ++report_.lines_added;
+    emitted_mm_ = reached(piece.command_mm, false);
+  }
 }
 
 void ProgramPost::line(std::string_view raw, int number, bool newline) {
@@ -611,17 +739,18 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   }
   if (!emitted_known_) emitted_mm_ = m.start_mm;
 
+  if (m.kind == nc::MotionKind::kCycle && options_.expand_cycles) {
+    expand_cycle(b, fx, c, lower, spaces, dec);
+    return;
+  }
   if (m.kind == nc::MotionKind::kCycle &&
       (!fx.more_holes.empty() || !interp_.state().absolute || b.find('@') || b.find('^'))) {
     cycle_holes(b, fx, c, lower, spaces, dec);
     return;
   }
   if (m.kind == nc::MotionKind::kRapid || m.kind == nc::MotionKind::kCycle) {
-    const ApproachDirections d = m.kind == nc::MotionKind::kCycle
-                                     ? ApproachDirections{last_dir_[0], last_dir_[1], -1, 0, 0, 0}
-                                     : directions_of(m.start_mm, m.end_mm, last_dir_);
-    last_dir_ = d;
-    const Vector3d cmd = command(c, m.end_mm, d);
+    ApproachDirections d;
+    const Vector3d cmd = position_command(c, m.start_mm, m.end_mm, m.kind == nc::MotionKind::kCycle, d);
     nc::BlockEdit edit;
     std::string insert;
     bool changed = false;
@@ -724,6 +853,17 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     }
   }
   const nc::State& s = interp_.state();
+  auto g93_share = [&](double s0, double s1, double step_mm) {
+    // Inverse time: the piece takes its share of the block's time. A
+    // take-up step at a reversal covers no nominal path: it takes the time
+    // of its own length at the block's nominal speed.
+    double share = s1 - s0;
+    if (share < 1e-9) {
+      const double length = nc::path_length_mm(m);
+      share = length > 0 ? step_mm / length : 0.0;
+    }
+    return std::max(1e-12, share);
+  };
   // The block itself becomes the first piece: its X Y Z words (and an
   // arc's I J K R P and G2/G3, G93's F) give way to the piece's words. At
   // most 3 + 5 + 1 + 1 distinct words (a letter twice, or two motion G
@@ -756,9 +896,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
       if (spaces) *p++ = ' ';
       *p++ = lower ? 'f' : 'F';
       w.commit(p);
-      // Inverse time: the piece takes its share of the block's time.
-      const double share = std::max(1e-12, s1 - s0);
-      append_number(w, s.feed / share, 4);
+      append_number(w, s.feed / g93_share(s0, s1, (cmd - emitted_mm_).norm()), 4);
     }
   };
   CharBuffer& previous_words = previous_words_;

@@ -39,6 +39,11 @@ struct PostOptions {
   double tolerance_mm = 1e-3;
   int decimals = -1;  ///< -1: 4 for mm blocks, 5 for inch blocks
   OutsidePolicy outside = OutsidePolicy::kError;
+  /// Canned cycles G81 G82 G85 G89 written out as their moves (G0, G1
+  /// segmented like any feed move, G4), so that the feed into the hole (and
+  /// out of it for G85 G89) keeps the tolerance too, not only the hole's
+  /// bottom. Other cycles (pecking, spindle stops) are refused with it.
+  bool expand_cycles = false;
 };
 
 struct PostReport {

@@ -3,6 +3,8 @@
 // hand, refusals of unsupported constructs with file:line, and the modes
 // (inch, incremental, work offsets, tool length, canned cycles).
 #include <cmath>
+#include <random>
+#include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -63,6 +65,40 @@ TEST(NcBlock, KeepsSpansAndScalesCodes) {
   EXPECT_EQ(b.text.substr(b.words[2].begin, b.words[2].end - b.words[2].begin), "x 1 0.5");
   EXPECT_EQ(b.words[4].code10, 382);
   EXPECT_EQ(b.comment, "comment");
+}
+
+// Every number the lexer reads equals the correctly rounded value of its
+// digits (std::from_chars), with its decimals and span, whatever follows it
+// (the fast path for CAM's plain numbers and the general one agree).
+TEST(NcBlock, NumbersReadAsTheirCorrectlyRoundedValue) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> len(0, 8), digit(0, 9), pick(0, 6);
+  const char* tails[] = {"", " ", " Y1", "Y1", "(c)", " ;x", "\t"};
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::string num = pick(rng) == 0 ? "-" : pick(rng) == 0 ? "+" : "";
+    const int int_digits = len(rng), frac_digits = len(rng) % 7;
+    for (int k = 0; k < int_digits; ++k) num += static_cast<char>('0' + digit(rng));
+    const bool point = frac_digits > 0 || pick(rng) == 0;
+    if (point) num += '.';
+    for (int k = 0; k < frac_digits; ++k) num += static_cast<char>('0' + digit(rng));
+    if (int_digits + frac_digits == 0) num += '7';
+    const std::string text = "X" + num + tails[trial % 7];
+    const nc::Block b = nc::lex_block(text, 1, "n.ngc");
+    ASSERT_GE(b.words.size(), 1u) << text;
+    const nc::Word& w = b.words[0];
+    double want = 0;
+    const char* first = num.data() + (num[0] == '+' ? 1 : 0);
+    std::from_chars(first, num.data() + num.size(), want);
+    EXPECT_EQ(w.value, want) << text;
+    EXPECT_EQ(std::signbit(w.value), num[0] == '-') << text;
+    EXPECT_EQ(w.end, 1 + num.size()) << text;
+    const size_t dot = num.find('.');
+    EXPECT_EQ(w.decimals, dot == std::string::npos ? 0 : static_cast<int>(num.size() - dot - 1)) << text;
+  }
+  // Spaces inside a number join its parts (RS274NGC); a second point ends it.
+  EXPECT_EQ(nc::lex_block("X 1 2.5 Y3", 1, "n.ngc").words[0].value, 12.5);
+  EXPECT_EQ(nc::lex_block("X1 .5", 1, "n.ngc").words[0].value, 1.5);
+  EXPECT_THROW(nc::lex_block("X1.2.3", 1, "n.ngc"), InputError);
 }
 
 TEST(NcBlock, RefusesWhatItDoesNotRead) {
@@ -360,6 +396,63 @@ TEST(PostIncremental, RoundingsOfIncrementsDoNotAddUp) {
   const post::VerifyResult r = post::verify_programs(a, "inc.ngc", b, "out.ngc", hsu(), hsu_errors(), s, {});
   EXPECT_GT(r.before.max_um, 5.0);
   EXPECT_LE(r.after.max_um, 1.0 + 0.09) << "worst at line " << r.after.worst_line;
+}
+
+// Under G93 (inverse time) every piece carries its F: the pieces of a block
+// share its time, and a lost-motion take-up step (no nominal path) takes the
+// time of its own length at the block's speed, not an absurd F.
+TEST(PostInverseTime, PiecesShareTheBlocksTimeAndStepsGetASensibleFeed) {
+  const std::string program = "G21 G90 G17\nG0 X10 Y10 Z10\nG93 G1 X100 Y10 Z10 F2\nX20 Y12 F2\nX110 F1\nG94\nM2\n";
+  const std::string out = post(program, hsu_errors(), offset_setup(150, 100, 100));
+  double minutes_in = 0.5 + 0.5 + 1.0, minutes_out = 0.0;
+  int steps = 0;
+  std::istringstream lines(out);
+  std::string l;
+  bool g93 = false;
+  while (std::getline(lines, l)) {
+    if (l.find("G93") != std::string::npos) g93 = true;
+    if (l.find("G94") != std::string::npos) g93 = false;
+    const size_t f = l.find('F');
+    if (!g93 || f == std::string::npos) continue;
+    const double F = std::strtod(l.c_str() + f + 1, nullptr);
+    ASSERT_GT(F, 0.0) << l;
+    EXPECT_LT(F, 1e6) << l;  // 3 um at 180 mm/min: F 6e4
+    if (F > 100) ++steps;
+    minutes_out += 1.0 / F;
+  }
+  EXPECT_GE(steps, 1);  // the reversals of X at lines 4 and 5
+  EXPECT_NEAR(minutes_out, minutes_in, 1e-3);
+}
+
+// The drilling cycles of pocket.ngc on the sample machine (X with 3 um of
+// lost motion): between holes X does not move nominally but its command
+// creeps; the approach takes up the play in the creep's direction, so the
+// hole is where the command says (without it the play was half taken up:
+// 3.1 um). --expand-cycles writes the cycles out as moves, the feed into
+// each hole segmented within tolerance like any feed move.
+TEST(PostCycles, HolesApproachedWithThePlayTakenUpAndExpandedCyclesKeepTheTolerance) {
+  const std::string program = read_file(test::source_path("samples/programs/pocket.ngc"));
+  const nc::ProgramSetup s = offset_setup(250, 200, 100);
+  for (const bool expand : {false, true}) {
+    SCOPED_TRACE(expand ? "--expand-cycles" : "cycles kept");
+    std::istringstream in(program);
+    std::ostringstream out;
+    post::PostOptions o;
+    o.expand_cycles = expand;
+    post::post_program(in, "pocket.ngc", out, hsu(), hsu_errors(), s, o);
+    EXPECT_EQ(out.str().find("G81") == std::string::npos, expand);
+    std::istringstream a(program), b(out.str());
+    const post::VerifyResult r = post::verify_programs(a, "pocket.ngc", b, "out.ngc", hsu(), hsu_errors(), s, {});
+    EXPECT_GT(r.before.max_um, 20.0);
+    EXPECT_LE(r.after.max_um, 1.0 + 0.09) << "worst at line " << r.after.worst_line;
+  }
+  // Pecking and spindle-stop cycles are not written out.
+  post::PostOptions o;
+  o.expand_cycles = true;
+  std::istringstream in("G21 G90\nG0 X10 Y10 Z10\nG83 X20 Y20 Z-5 R2 Q1 F100\n");
+  std::ostringstream out;
+  EXPECT_THROW(post::post_program(in, "peck.ngc", out, hsu(), hsu_errors(), offset_setup(100, 100, 100), o),
+               InputError);
 }
 
 // post --table (cli.md): the table's interpolated tool-tip error stands for

@@ -73,6 +73,7 @@ Runner register_post(CLI::App& app) {
     double tolerance_um = 1.0;
     int decimals = -1;
     bool clamp = false;
+    bool expand_cycles = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand("post", "Rewrite an NC program for the real machine (correction of every point, segmented within tolerance)");
@@ -88,6 +89,8 @@ Runner register_post(CLI::App& app) {
   o->placement.add_to(*sub);
   o->five.add_to(*sub, /*post=*/true);
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
+  sub->add_flag("--expand-cycles", o->expand_cycles,
+                "Write canned cycles G81 G82 G85 G89 out as their moves, so the feed into the hole keeps the tolerance too (three axes)");
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
   sub->footer("Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
@@ -96,7 +99,10 @@ Runner register_post(CLI::App& app) {
               "      --part-origin 0,0,0 impeller-7bl-xyzac.ngc -o impeller-machine.ngc");
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
-    if (o->five.applies(m)) return run_five_axis(*o, o->five.place_part(m));
+    if (o->five.applies(m)) {
+      if (o->expand_cycles) throw UsageError("--expand-cycles is for three-axis programs");
+      return run_five_axis(*o, o->five.place_part(m));
+    }
     if (o->errors.empty() && o->table.empty()) throw UsageError("post needs --errors or --table");
     std::optional<maps::VolumetricTable> table;
     ErrorSet e;
@@ -115,6 +121,7 @@ Runner register_post(CLI::App& app) {
     opt.tolerance_mm = o->tolerance_um * 1e-3;
     opt.decimals = o->decimals;
     opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+    opt.expand_cycles = o->expand_cycles;
     std::ifstream file_in;
     std::istream* in = &std::cin;
     std::string in_name = "<stdin>";
