@@ -660,6 +660,13 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     bool changed = false;
     const nc::State& s = interp_.state();
     std::array<bool, 3> needed{};
+    // A polar block (@ ^) is always rewritten as X Y: under G91 the
+    // controller would apply its increments to the corrected point, not the
+    // nominal one, and X Y next to @ ^ is an error.
+    const bool polar = b.has('@') || b.has('^');
+    if (polar)
+      for (char L : {'@', '^'})
+        if (const int i = index_of(L); i >= 0) edit.remove.push_back(i);
     for (int a = 0; a < 3; ++a) {
       const int idx = index_of("XYZ"[a]);
       const double new_value = program_value(a, cmd[a], fx.g53);
@@ -668,7 +675,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
           m.kind == nc::MotionKind::kCycle && a == 2
               ? (idx >= 0 ? std::abs(new_value - b.words[static_cast<size_t>(idx)].value) >= half_unit
                           : std::abs(cmd.z() - m.end_mm.z()) >= half_unit * s.unit_mm)
-              : needs_word(a, cmd);
+              : needs_word(a, cmd) || (polar && a < 2);
       changed = changed || needed[static_cast<size_t>(a)];
     }
     // When any axis changes, the axis words are written together in X Y Z
@@ -748,7 +755,8 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   const std::vector<Piece>& pieces = segment(c, m, start_cmd);
   const bool arc = m.kind == nc::MotionKind::kArc;
   // A straight move whose end needs no change stays as written.
-  if (!arc && pieces.size() == 1) {
+  const bool polar = b.has('@') || b.has('^');  // always rewritten as X Y (see the rapids)
+  if (!arc && pieces.size() == 1 && !polar) {
     bool needed = false;
     for (int a = 0; a < 3; ++a) needed = needed || needs_word(a, pieces[0].command_mm);
     if (!needed) {
@@ -771,7 +779,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   // The block itself becomes the first piece.
   nc::BlockEdit& edit = edit_;
   edit.remove.clear();
-  for (char L : {'X', 'Y', 'Z'})
+  for (char L : {'X', 'Y', 'Z', '@', '^'})
     if (const int i = index_of(L); i >= 0) edit.remove.push_back(i);
   if (arc) {
     for (char L : {'I', 'J', 'K', 'R', 'P'})
