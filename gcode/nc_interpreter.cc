@@ -412,6 +412,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         fail(b, g[kMotion], "peck drilling needs a Q word (peck depth)");
       if ((mode == 820 || mode == 860 || mode == 890) && !word('P') && starts)
         fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
+      // LinuxCNC (convert_cycle) refuses cycles under G93.
+      if (s_.feed_mode == 930)
+        fail(b, g[kMotion], "canned cycle under inverse time feed (G93); LinuxCNC refuses it: use G94");
       if (s_.feed <= 0.0) fail(b, nullptr, "canned cycle with no feed rate; add an F word");
       mo.kind = MotionKind::kCycle;
       // LinuxCNC (interp_cycles.cc, convert_cycle_xy). G90: R and Z are
