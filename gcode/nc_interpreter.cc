@@ -216,6 +216,13 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   if (polar && (given_word('X') || given_word('Y')))
     fail(b, given_word('X') ? given_word('X') : given_word('Y'),
          "X or Y with polar coordinates (@ ^) in one block; use one form or the other");
+  // LinuxCNC checks the plane in effect before the block (enhance_block):
+  // polar words in G18/G19 are refused, and so is `G17 @..` while G18/G19
+  // is active, but `G18 @..` from G17 is read (as X Y).
+  if (polar && s_.plane != 0)
+    fail(b, polar_radius ? polar_radius : polar_angle,
+         "polar coordinates (@ ^) while G18 or G19 is active; LinuxCNC reads them in G17 only: "
+         "select G17 in an earlier block, or use X and Y");
 
   // The block of most programs: axis words (and F) only, no G or M code, in
   // G0 or G1. What the steps below do for it, and nothing else (they would
@@ -331,6 +338,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   if (g53 && !s_.absolute) fail(b, g[kNonModal], "G53 needs absolute mode (G90)");
   if (g53 && polar) fail(b, polar_radius ? polar_radius : polar_angle, "polar coordinates (@ ^) with G53; use X and Y");
 
+  // LinuxCNC asks for Z, R, P and Q only when the block starts a cycle other
+  // than the modal one (a G81 restated in G81 keeps the modal values).
+  const int motion_before = s_.motion;
   if (g[kMotion]) {
     s_.motion = g[kMotion]->code10;
     effect.motion_code = s_.motion;
@@ -486,14 +496,18 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       if (l && (l->value < 1 || l->value != std::floor(l->value) || l->value > kMaxCycleRepeats))
         fail(b, l, fmt::format("L (repeats) must be a positive integer up to {}", kMaxCycleRepeats));
       const int repeats = l ? static_cast<int>(l->value) : 1;
+      const bool starts = mode != motion_before;
       if (const Word* z = word('Z')) s_.cycle_z = z->value;
-      else if (g[kMotion]) fail(b, g[kMotion], "canned cycle needs a Z word (hole bottom)");
+      else if (starts) fail(b, g[kMotion], "canned cycle needs a Z word (hole bottom)");
       if (const Word* r = word('R')) s_.cycle_r = r->value;
-      else if (g[kMotion]) fail(b, g[kMotion], "canned cycle needs an R word (retract plane)");
-      if ((mode == 830 || mode == 730) && !word('Q') && g[kMotion])
+      else if (starts) fail(b, g[kMotion], "canned cycle needs an R word (retract plane)");
+      if ((mode == 830 || mode == 730) && !word('Q') && starts)
         fail(b, g[kMotion], "peck drilling needs a Q word (peck depth)");
-      if ((mode == 820 || mode == 890) && !word('P') && g[kMotion])
+      if ((mode == 820 || mode == 860 || mode == 890) && !word('P') && starts)
         fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
+      // LinuxCNC (convert_cycle) refuses cycles under G93.
+      if (s_.feed_mode == 930)
+        fail(b, g[kMotion], "canned cycle under inverse time feed (G93); LinuxCNC refuses it: use G94");
       if (s_.feed <= 0.0) fail(b, nullptr, "canned cycle with no feed rate; add an F word");
       mo.kind = MotionKind::kCycle;
       // LinuxCNC (interp_cycles.cc, convert_cycle_xy). G90: R and Z are

@@ -80,7 +80,10 @@ struct State {
   double tool_length_mm = 0.0; ///< of the active compensation
   int tool = 0;                ///< T in the spindle (after M6)
   int selected_tool = 0;       ///< last T word
-  bool g98 = true;             ///< canned cycle return to the initial level
+  /// Canned cycles return to the initial level (G98) or to R (G99).
+  /// LinuxCNC's interpreter starts in G99 (its retract mode is zero,
+  /// R_PLANE, until G98; rs274 shows it), not G98.
+  bool g98 = false;
   double cycle_r = 0.0, cycle_z = 0.0;  ///< modal R and Z of canned cycles (program units)
   /// LinuxCNC's initial level of a run of canned-cycle blocks: the Z (mm,
   /// machine) where the first of them started; G98 returns to it (or to R

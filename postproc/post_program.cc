@@ -756,6 +756,13 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     bool changed = false;
     const nc::State& s = interp_.state();
     std::array<bool, 3> needed{};
+    // A polar block (@ ^) is always rewritten as X Y: under G91 the
+    // controller would apply its increments to the corrected point, not the
+    // nominal one, and X Y next to @ ^ is an error.
+    const bool polar = b.has('@') || b.has('^');
+    if (polar)
+      for (char L : {'@', '^'})
+        if (const int i = index_of(L); i >= 0) edit.remove.push_back(i);
     for (int a = 0; a < 3; ++a) {
       const int idx = index_of("XYZ"[a]);
       const double new_value = program_value(a, cmd[a], fx.g53);
@@ -764,7 +771,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
           m.kind == nc::MotionKind::kCycle && a == 2
               ? (idx >= 0 ? std::abs(new_value - b.words[static_cast<size_t>(idx)].value) >= half_unit
                           : std::abs(cmd.z() - m.end_mm.z()) >= half_unit * s.unit_mm)
-              : needs_word(a, cmd);
+              : needs_word(a, cmd) || (polar && a < 2);
       changed = changed || needed[static_cast<size_t>(a)];
     }
     // When any axis changes, the axis words are written together in X Y Z
@@ -844,7 +851,8 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   const std::vector<Piece>& pieces = segment(c, m, start_cmd);
   const bool arc = m.kind == nc::MotionKind::kArc;
   // A straight move whose end needs no change stays as written.
-  if (!arc && pieces.size() == 1) {
+  const bool polar = b.has('@') || b.has('^');  // always rewritten as X Y (see the rapids)
+  if (!arc && pieces.size() == 1 && !polar) {
     bool needed = false;
     for (int a = 0; a < 3; ++a) needed = needed || needs_word(a, pieces[0].command_mm);
     if (!needed) {
@@ -864,14 +872,17 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     }
     return std::max(1e-12, share);
   };
-  // The block itself becomes the first piece: its X Y Z words (and an
-  // arc's I J K R P and G2/G3, G93's F) give way to the piece's words. At
-  // most 3 + 5 + 1 + 1 distinct words (a letter twice, or two motion G
-  // codes, the interpreter refused).
-  std::array<int, 10> remove;
+  // The block itself becomes the first piece: its X Y Z words, its polar
+  // words @ ^ (a corrected point goes out as X Y: LinuxCNC refuses @ ^
+  // beside X Y), and an arc's I J K R P and G2/G3, G93's F give way to the
+  // piece's words. At most 3 + 2 + 5 + 1 + 1 distinct words (a letter
+  // twice, or two motion G codes, the interpreter refused).
+  std::array<int, 12> remove;
   std::size_t removed = 0;
   for (int a = 0; a < 3; ++a)
     if (axis_index[a] >= 0) remove[removed++] = axis_index[a];
+  for (char L : {'@', '^'})
+    if (const int i = index_of(L); i >= 0) remove[removed++] = i;
   if (arc) {
     for (char L : {'I', 'J', 'K', 'R', 'P'})
       if (const int i = index_of(L); i >= 0) remove[removed++] = i;

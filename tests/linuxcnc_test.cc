@@ -136,7 +136,12 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
                         {"3dtest.ngc", "", "hsu-3axis", {250, 200, 100}},
                         {"cds.ngc", "--tool-table", "hsu-3axis", {250, 200, 100}},
                         {"hole-circle.ngc", "", "hsu-3axis", {250, 200, 100}},
-                        {"plasmatest.ngc", "--initial-position 0,0,0", "gantry-3axis", {100, 100, 100}}};
+                        {"plasmatest.ngc", "--initial-position 0,0,0", "gantry-3axis", {100, 100, 100}},
+                        // volmap's own: every polar and canned-cycle rule
+                        // (G90/G91, L repeats, polar holes, restated cycles,
+                        // the initial G99) in one program each.
+                        {"tests/data/linuxcnc/polar.ngc", "", "hsu-3axis", {250, 200, 100}},
+                        {"tests/data/linuxcnc/cycles.ngc", "", "hsu-3axis", {250, 200, 100}}};
   const fs::path dir = fs::path(::testing::TempDir()) / "volmap_linuxcnc";
   fs::create_directories(dir);
   for (const Case& k : cases) {
@@ -146,9 +151,10 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
     const Machine m = load_machine_json(machine);
     const ErrorSet e = load_errors_csv(errors);
     const Eigen::Vector3d wo(k.wo[0], k.wo[1], k.wo[2]);
-    const std::string in = nc + k.program;
+    const std::string program = k.program;
+    const std::string in = program.rfind("tests/", 0) == 0 ? test::source_path(program) : nc + program;
     ASSERT_TRUE(fs::exists(in)) << in;
-    const std::string out = (dir / (std::string("post-") + k.program)).string();
+    const std::string out = (dir / ("post-" + fs::path(program).filename().string())).string();
     std::string args = k.extra_args;
     const bool uses_tools = args == "--tool-table";
     if (uses_tools) args += " " + tbl;

@@ -233,7 +233,8 @@ TEST(NcInterpreter, CommonBlockAsTheGeneralSteps) {
 
 // hole-circle.ngc's cycle, by hand: from (1.5, 0, 0) in, G91 G81 R.1 Z-.5
 // ^60 L6: R is 0.1 in above the start level, the bottom 0.5 in below R
-// (-0.4 in), the tool returns to R (G98 with the start below R); each
+// (-0.4 in), the tool returns to R (G99, LinuxCNC's initial mode; G98 too,
+// the start being below R); each
 // repeat turns the hole 60 degrees about the origin on the 1.5 in circle.
 TEST(NcInterpreter, IncrementalCannedCycleRepeatsRoundACircle) {
   nc::Interpreter in(offset_setup(100, 100, 100), "p.ngc");
@@ -262,6 +263,59 @@ TEST(NcInterpreter, IncrementalCannedCycleRepeatsRoundACircle) {
   in.execute(nc::lex_block("G90 G81 X1 Y1 Z-.2 R.1 L3", 4, "p.ngc"), fx);
   ASSERT_EQ(fx.more_holes.size(), 2u);
   EXPECT_EQ(fx.more_holes[1].end_mm, fx.motion.end_mm);
+}
+
+// The rest of the cycle rules, by hand (mm, work offset (100, 100, 100)),
+// each checked against rs274 (tests/data/linuxcnc/cycles.ngc):
+// - no G98/G99: LinuxCNC starts in G99, so from Z 20 a G81 R5 hole returns
+//   to R (105), not to the initial level (120);
+// - a G81 restated while G81 is modal needs no Z or R: bottom 98, R 105;
+// - G91 G81 X5 Y-2 L3 from over (6, 6) at R: R 5 above the initial level
+//   (which is Z 20 where the run began: 100 + 20 + 5 = 125), Z -2 below R
+//   (123), holes at (11, 4), (16, 2), (21, 0);
+// - G98 in G91 with R -10 below the initial level: R 110, bottom 107, and
+//   the tool returns to the initial level 120.
+TEST(NcInterpreter, CannedCycleRulesAsRs274ReadsThem) {
+  nc::Interpreter in(offset_setup(100, 100, 100), "p.ngc");
+  nc::BlockEffect fx;
+  auto run = [&](const char* l) { in.execute(nc::lex_block(l, 1, "p.ngc"), fx); };
+  run("G21 G17 G90");
+  run("G0 X10 Y10 Z20");
+  run("G81 X5 Y5 R5 Z-2 F100");
+  EXPECT_NEAR(fx.motion.clear_mm, 105, 1e-12);
+  EXPECT_NEAR(in.state().position_mm.z(), 105, 1e-12);
+  run("G81 X6 Y6");
+  EXPECT_EQ(fx.motion.end_mm, Eigen::Vector3d(106, 106, 98));
+  EXPECT_NEAR(fx.motion.r_mm, 105, 1e-12);
+  run("G91 X5 Y-2 R5 Z-2 L3");
+  ASSERT_EQ(fx.more_holes.size(), 2u);
+  EXPECT_EQ(fx.motion.end_mm, Eigen::Vector3d(111, 104, 123));
+  EXPECT_EQ(fx.more_holes[0].end_mm, Eigen::Vector3d(116, 102, 123));
+  EXPECT_EQ(fx.more_holes[1].end_mm, Eigen::Vector3d(121, 100, 123));
+  EXPECT_NEAR(fx.motion.r_mm, 125, 1e-12);
+  run("G98 X0 R-10 Z-3");
+  EXPECT_NEAR(fx.motion.r_mm, 110, 1e-12);
+  EXPECT_NEAR(fx.motion.end_mm.z(), 107, 1e-12);
+  EXPECT_NEAR(in.state().position_mm.z(), 120, 1e-12);
+  // A different cycle needs its words again (LinuxCNC: motion mode changes).
+  EXPECT_THROW(run("G82 X1"), InputError);
+}
+
+// Polar words and the plane: LinuxCNC looks at the plane in effect before
+// the block, so `G18 @..` from G17 is read (as X Y: @10 ^90 is (0, 10)),
+// while any polar word under G18/G19, even in a block that selects G17, is
+// refused.
+TEST(NcInterpreter, PolarWordsNeedG17BeforeTheBlock) {
+  nc::Interpreter in(offset_setup(0, 0, 0), "p.ngc");
+  nc::BlockEffect fx;
+  auto run = [&](const char* l) { in.execute(nc::lex_block(l, 1, "p.ngc"), fx); };
+  run("G21 G17 G90");
+  run("G0 X1 Y1 Z5");
+  run("G18 G0 @10 ^90");
+  EXPECT_NEAR(in.state().position_mm.x(), 0, 1e-12);
+  EXPECT_NEAR(in.state().position_mm.y(), 10, 1e-12);
+  EXPECT_THROW(run("G17 G0 @10 ^0"), InputError);
+  EXPECT_THROW(run("G0 ^45"), InputError);
 }
 
 TEST(NcWriter, FormatsDeterministically) {
