@@ -394,7 +394,8 @@ namespace {
 // evaluate() for linear joints only, on the tool tip alone: the same
 // operations in the same order (PointDir's lane 0), so the result is exact()'s
 // to the bit (tests/error_model_test.cc checks it).
-Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir) const {
+Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir,
+                                             std::uint64_t* clamped_out) const {
   constexpr int kMaxJoints = 6;
   std::array<Eigen::Matrix3d, kMaxJoints> R_e;
   std::array<Eigen::Vector3d, kMaxJoints> delta_e;
@@ -408,7 +409,10 @@ Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDire
     joint_error(bj, u[i], dir[static_cast<size_t>(i)], R_e[static_cast<size_t>(k)],
                 delta_e[static_cast<size_t>(k)], clamped);
   }
-  if (clamped) clamped_->fetch_add(clamped, std::memory_order_relaxed);
+  if (clamped_out)
+    *clamped_out += clamped;
+  else if (clamped)
+    clamped_->fetch_add(clamped, std::memory_order_relaxed);
 
   Eigen::Vector3d a = machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis;
   Eigen::Vector3d n = a;

@@ -117,8 +117,11 @@ class ErrorModel {
   /// bit the same numbers (the same operations in the same order), without
   /// the tool axis and the nominal lane's rotations. u: the axis values by
   /// AxisVector index (mm). The three-axis post-processor's hot path
-  /// (docs/post.md "Speed").
-  Eigen::Vector3d tip_error_linear(const double* u, const ApproachDirections& dir) const;
+  /// (docs/post.md "Speed"). With clamped_out, the clamped evaluations
+  /// (OutsidePolicy::kClamp) are added there instead of to clamped_count()
+  /// (an evaluation made ahead, counted only if its result is used).
+  Eigen::Vector3d tip_error_linear(const double* u, const ApproachDirections& dir,
+                                   std::uint64_t* clamped_out = nullptr) const;
 
   /// Number of evaluations that were clamped (OutsidePolicy::kClamp).
   std::uint64_t clamped_count() const { return clamped_->load(); }
