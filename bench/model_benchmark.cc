@@ -1,6 +1,7 @@
 // The exact five-axis model at one axis position, every component error
 // interpolated (issue target: <= 200 ns on one core), and the three-axis
 // model and the first-order form beside it.
+#include <array>
 #include <random>
 #include <vector>
 
@@ -50,6 +51,33 @@ void BM_FirstOrderModel(benchmark::State& s, const char* name) { BM_Model<false>
 BENCHMARK_CAPTURE(BM_ExactModel, five_axis, "lei-hsu-xyzac");
 BENCHMARK_CAPTURE(BM_ExactModel, three_axis, "hsu-3axis");
 BENCHMARK_CAPTURE(BM_FirstOrderModel, five_axis, "lei-hsu-xyzac");
+
+// The three-axis post-processor's hot path: the tool tip error of an
+// all-linear machine, once per NC line, positions inside the travel and
+// approach directions varying (+1, -1, 0) as along a program.
+void BM_TipErrorLinear(benchmark::State& state, const char* name) {
+  const volmap::Machine m = volmap::load_machine_json(sample(std::string("machines/") + name + ".json"));
+  const volmap::ErrorModel model(m, volmap::load_errors_csv(sample(std::string("errors/") + name + ".csv")));
+  const auto us = poses(m, 1024);
+  std::mt19937 rng(2);
+  std::uniform_int_distribution<int> die(-1, 1);
+  std::vector<std::array<double, 3>> u3(1024);
+  std::vector<volmap::ApproachDirections> dirs(1024);
+  for (size_t k = 0; k < 1024; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      u3[k][static_cast<size_t>(i)] = us[k][i];
+      dirs[k][static_cast<size_t>(i)] = static_cast<std::int8_t>(die(rng));
+    }
+  }
+  size_t k = 0;
+  for (auto _ : state) {
+    const size_t j = k++ & 1023;
+    Eigen::Vector3d e = model.tip_error_linear(u3[j].data(), dirs[j]);
+    benchmark::DoNotOptimize(e);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK_CAPTURE(BM_TipErrorLinear, three_axis, "hsu-3axis");
 
 }  // namespace
 

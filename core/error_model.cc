@@ -57,27 +57,28 @@ void nominal_location_frames(const std::vector<Joint>& chain,
 }  // namespace
 
 namespace {
-// Rz(c) Ry(b) Rx(a), written element by element so that it inlines into the
-// hot loop.
-[[gnu::always_inline]] inline void small_rotation_into(const Eigen::Vector3d& eps_rad,
-                                                       Eigen::Matrix3d& R) {
+// Rz(c) Ry(b) Rx(a) of the angles (ex, ey, ez), written element by element
+// so that it inlines into the hot loop; M is Eigen::Matrix3d or any type
+// with R(i, j).
+template <class M>
+[[gnu::always_inline]] inline void small_rotation_elements(double ex, double ey, double ez,
+                                                           M& R) {
   double sa, ca, sb, cb, sc, cc;
-  if (std::abs(eps_rad.x()) < 1e-3 && std::abs(eps_rad.y()) < 1e-3 &&
-      std::abs(eps_rad.z()) < 1e-3) {
+  if (std::abs(ex) < 1e-3 && std::abs(ey) < 1e-3 && std::abs(ez) < 1e-3) {
     // The common case, every angle in small_sincos's first range: the same
     // series, two angles per packed operation (bit-identical results).
     using v2d = double __attribute__((vector_size(16)));
-    const v2d x = {eps_rad.x(), eps_rad.y()}, x2 = x * x;
+    const v2d x = {ex, ey}, x2 = x * x;
     const v2d s = x * (1 - x2 * (1.0 / 6) * (1 - x2 * (1.0 / 20)));
     const v2d c = 1 - x2 * 0.5 * (1 - x2 * (1.0 / 12));
     sa = s[0], sb = s[1], ca = c[0], cb = c[1];
-    const double z = eps_rad.z(), z2 = z * z;
+    const double z = ez, z2 = z * z;
     sc = z * (1 - z2 * (1.0 / 6) * (1 - z2 * (1.0 / 20)));
     cc = 1 - z2 * 0.5 * (1 - z2 * (1.0 / 12));
   } else {
-    small_sincos(eps_rad.x(), sa, ca);
-    small_sincos(eps_rad.y(), sb, cb);
-    small_sincos(eps_rad.z(), sc, cc);
+    small_sincos(ex, sa, ca);
+    small_sincos(ey, sb, cb);
+    small_sincos(ez, sc, cc);
   }
   const double scsb = sc * sb, ccsb = cc * sb;
   R(0, 0) = cc * cb;
@@ -89,6 +90,10 @@ namespace {
   R(2, 0) = -sb;
   R(2, 1) = cb * sa;
   R(2, 2) = cb * ca;
+}
+[[gnu::always_inline]] inline void small_rotation_into(const Eigen::Vector3d& eps_rad,
+                                                       Eigen::Matrix3d& R) {
+  small_rotation_elements(eps_rad.x(), eps_rad.y(), eps_rad.z(), R);
 }
 }  // namespace
 
@@ -185,6 +190,36 @@ ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
           if (bj.joint->direction_parent == Eigen::Vector3d::Unit(a)) bj.coordinate_axis = a;
       bj.t_parent_loc_mm = bj.joint->offset_parent_mm + L.delta_mm;
     }
+  }
+
+  // tip_error_linear's flat plan: the same numbers, copied.
+  if (all_linear_) {
+    const Eigen::Vector3d start =
+        machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis;
+    for (int i = 0; i < 3; ++i) {
+      linear_start_mm_[i] = start[i];
+      linear_origin_mm_[i] = machine_.workpiece_origin_mm[i];
+    }
+    int k = 0;
+    for (const auto* chain : {&workpiece_, &tool_}) {
+      for (const BoundJoint& bj : *chain) {
+        LinearJoint& J = linear_[static_cast<size_t>(k++)];
+        J.components = bj.components;
+        J.index = bj.joint->index;
+        J.workpiece = bj.side == ChainSide::kWorkpiece;
+        J.independent = bj.independent;
+        J.has_location_rotation = bj.has_location_rotation;
+        for (int i = 0; i < 3; ++i) {
+          J.direction[i] = bj.joint->direction_parent[i];
+          J.offset_mm[i] = bj.joint->offset_parent_mm[i];
+          J.t_loc_mm[i] = bj.t_parent_loc_mm[i];
+          J.r_meas_mm[i] = bj.r_meas_mm[i];
+          for (int j = 0; j < 3; ++j) J.R_loc[i][j] = bj.R_parent_loc(i, j);
+        }
+      }
+    }
+    linear_work_ = static_cast<int>(workpiece_.size());
+    linear_count_ = k;
   }
 }
 
@@ -376,71 +411,118 @@ PoseError ErrorModel::exact(const AxisVector& u,
   return PoseError{a.tip_mm - n.tip_mm, a.axis - n.axis};
 }
 
+// evaluate() for linear joints only, on the tool tip alone: the same
+// operations in the same order (PointDir's lane 0, joint_error's arithmetic),
+// so the result is exact()'s to the bit (tests/error_model_test.cc checks it).
+// The joints' constants come from the flat plan linear_; each joint's error
+// rotation lives in registers, never in a Matrix3d array.
 namespace {
-// p <- R p and p <- R^T p on the point alone, each coordinate summed in the
-// order of PointDir::rotate / rotate_transposed (the same roundings).
-[[gnu::always_inline]] inline Eigen::Vector3d rotated(const Eigen::Matrix3d& R, const Eigen::Vector3d& p) {
-  Eigen::Vector3d r;
-  for (int i = 0; i < 3; ++i) r[i] = R(i, 0) * p[0] + R(i, 1) * p[1] + R(i, 2) * p[2];
-  return r;
-}
-[[gnu::always_inline]] inline Eigen::Vector3d rotated_back(const Eigen::Matrix3d& R, const Eigen::Vector3d& p) {
-  Eigen::Vector3d r;
-  for (int i = 0; i < 3; ++i) r[i] = R(0, i) * p[0] + R(1, i) * p[1] + R(2, i) * p[2];
-  return r;
-}
+// A 3x3 matrix as nine scalars (small_rotation_elements writes it).
+struct M33 {
+  double m[3][3];
+  [[gnu::always_inline]] double& operator()(int i, int j) { return m[i][j]; }
+  [[gnu::always_inline]] double operator()(int i, int j) const { return m[i][j]; }
+};
 }  // namespace
 
-// evaluate() for linear joints only, on the tool tip alone: the same
-// operations in the same order (PointDir's lane 0), so the result is exact()'s
-// to the bit (tests/error_model_test.cc checks it).
 Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir,
                                              std::uint64_t* clamped_out) const {
-  constexpr int kMaxJoints = 6;
-  std::array<Eigen::Matrix3d, kMaxJoints> R_e;
-  std::array<Eigen::Vector3d, kMaxJoints> delta_e;
-  const int n_work = static_cast<int>(workpiece_.size());
-  const int n_tool = static_cast<int>(tool_.size());
+  const int n_work = linear_work_;
+  const int n_all = linear_count_;
+  // Phase 1: the table lookups, in evaluate()'s order (the same exception
+  // first when several positions are outside).
+  std::array<std::array<double, kComponentCount>, kMaxLinearJoints> v;
   std::uint64_t clamped = 0;
-  for (int k = 0; k < n_work + n_tool; ++k) {
-    const BoundJoint& bj = k < n_work ? workpiece_[static_cast<size_t>(k)]
-                                      : tool_[static_cast<size_t>(k - n_work)];
-    const int i = bj.joint->index;
-    joint_error(bj, u[i], dir[static_cast<size_t>(i)], R_e[static_cast<size_t>(k)],
-                delta_e[static_cast<size_t>(k)], clamped);
+  for (int k = 0; k < n_all; ++k) {
+    const LinearJoint& J = linear_[static_cast<size_t>(k)];
+    if (J.components)
+      evaluate_axis(*J.components, u[J.index], dir[static_cast<size_t>(J.index)],
+                    options_.outside, v[static_cast<size_t>(k)], &clamped);
   }
   if (clamped_out)
     *clamped_out += clamped;
   else if (clamped)
     clamped_->fetch_add(clamped, std::memory_order_relaxed);
 
-  Eigen::Vector3d a = machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis;
-  Eigen::Vector3d n = a;
-  for (int k = n_tool - 1; k >= 0; --k) {
-    const BoundJoint& bj = tool_[static_cast<size_t>(k)];
-    const size_t e = static_cast<size_t>(n_work + k);
-    const Eigen::Vector3d motion = u[bj.joint->index] * bj.joint->direction_parent;
-    n += motion;
-    a = rotated(R_e[e], a);  // Trans(q d) E(q)
-    a += delta_e[e];
-    a += motion;
-    n += bj.joint->offset_parent_mm;
-    if (bj.has_location_rotation) a = rotated(bj.R_parent_loc, a);
-    a += bj.t_parent_loc_mm;
+  // joint_error(): E(q) = [R | delta], the independent pivot folded into
+  // delta (Eigen's R * r: rows 0 and 1 summed left to right as packets, row
+  // 2 as a scalar reduction, (a0 + (a1 + a2))).
+  auto joint_error = [&](const LinearJoint& J, const std::array<double, kComponentCount>& e,
+                         double q, M33& R, double (&delta)[3]) __attribute__((always_inline)) {
+    if (!J.components) {
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) R(i, j) = i == j ? 1.0 : 0.0;
+        delta[i] = 0.0;
+      }
+      return;
+    }
+    small_rotation_elements(e[3], e[4], e[5], R);
+    delta[0] = e[0], delta[1] = e[1], delta[2] = e[2];
+    if (J.independent) {
+      double r[3];
+      if (J.workpiece)
+        for (int i = 0; i < 3; ++i) r[i] = J.r_meas_mm[i] - q * J.direction[i];
+      else
+        for (int i = 0; i < 3; ++i) r[i] = J.r_meas_mm[i];
+      const double p0 = (R(0, 0) * r[0] + R(0, 1) * r[1]) + R(0, 2) * r[2];
+      const double p1 = (R(1, 0) * r[0] + R(1, 1) * r[1]) + R(1, 2) * r[2];
+      const double p2 = R(2, 0) * r[0] + (R(2, 1) * r[1] + R(2, 2) * r[2]);
+      delta[0] -= p0 - r[0];
+      delta[1] -= p1 - r[1];
+      delta[2] -= p2 - r[2];
+    }
+  };
+
+  double a[3], n[3];
+  for (int i = 0; i < 3; ++i) a[i] = n[i] = linear_start_mm_[i];
+  // Tool chain, spindle to base.
+  for (int k = n_all - 1; k >= n_work; --k) {
+    const LinearJoint& J = linear_[static_cast<size_t>(k)];
+    const double q = u[J.index];
+    M33 R;
+    double delta[3];
+    joint_error(J, v[static_cast<size_t>(k)], q, R, delta);
+    double motion[3];
+    for (int i = 0; i < 3; ++i) motion[i] = q * J.direction[i];
+    for (int i = 0; i < 3; ++i) n[i] += motion[i];
+    double r[3];
+    for (int i = 0; i < 3; ++i) r[i] = R(i, 0) * a[0] + R(i, 1) * a[1] + R(i, 2) * a[2];
+    for (int i = 0; i < 3; ++i) a[i] = r[i] + delta[i];
+    for (int i = 0; i < 3; ++i) a[i] += motion[i];
+    for (int i = 0; i < 3; ++i) n[i] += J.offset_mm[i];
+    if (J.has_location_rotation) {
+      for (int i = 0; i < 3; ++i)
+        r[i] = J.R_loc[i][0] * a[0] + J.R_loc[i][1] * a[1] + J.R_loc[i][2] * a[2];
+      for (int i = 0; i < 3; ++i) a[i] = r[i];
+    }
+    for (int i = 0; i < 3; ++i) a[i] += J.t_loc_mm[i];
   }
+  // Workpiece chain, base to workpiece.
   for (int k = 0; k < n_work; ++k) {
-    const BoundJoint& bj = workpiece_[static_cast<size_t>(k)];
-    const size_t e = static_cast<size_t>(k);
-    const Eigen::Vector3d motion = u[bj.joint->index] * bj.joint->direction_parent;
-    n -= bj.joint->offset_parent_mm;
-    a -= bj.t_parent_loc_mm;
-    if (bj.has_location_rotation) a = rotated_back(bj.R_parent_loc, a);
-    n -= motion;
-    a -= delta_e[e];
-    a -= motion;
-    a = rotated_back(R_e[e], a);
+    const LinearJoint& J = linear_[static_cast<size_t>(k)];
+    const double q = u[J.index];
+    M33 R;
+    double delta[3];
+    joint_error(J, v[static_cast<size_t>(k)], q, R, delta);
+    double motion[3];
+    for (int i = 0; i < 3; ++i) motion[i] = q * J.direction[i];
+    for (int i = 0; i < 3; ++i) n[i] -= J.offset_mm[i];
+    for (int i = 0; i < 3; ++i) a[i] -= J.t_loc_mm[i];
+    double r[3];
+    if (J.has_location_rotation) {
+      for (int i = 0; i < 3; ++i)
+        r[i] = J.R_loc[0][i] * a[0] + J.R_loc[1][i] * a[1] + J.R_loc[2][i] * a[2];
+      for (int i = 0; i < 3; ++i) a[i] = r[i];
+    }
+    for (int i = 0; i < 3; ++i) n[i] -= motion[i];
+    for (int i = 0; i < 3; ++i) a[i] -= delta[i];
+    for (int i = 0; i < 3; ++i) a[i] -= motion[i];
+    for (int i = 0; i < 3; ++i) r[i] = R(0, i) * a[0] + R(1, i) * a[1] + R(2, i) * a[2];
+    for (int i = 0; i < 3; ++i) a[i] = r[i];
   }
-  return (a - machine_.workpiece_origin_mm) - (n - machine_.workpiece_origin_mm);
+  return {(a[0] - linear_origin_mm_[0]) - (n[0] - linear_origin_mm_[0]),
+          (a[1] - linear_origin_mm_[1]) - (n[1] - linear_origin_mm_[1]),
+          (a[2] - linear_origin_mm_[2]) - (n[2] - linear_origin_mm_[2])};
 }
 
 void ErrorModel::levers(const AxisVector& u, std::vector<JointLever>& out) const {

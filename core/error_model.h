@@ -155,6 +155,28 @@ class ErrorModel {
   void evaluate(const AxisVector& u, const ApproachDirections& dir,
                 ToolPose& actual_pose, ToolPose& nominal_pose) const;
 
+  /// tip_error_linear's plan (all_linear_ only): each joint's constants
+  /// copied flat, in evaluate()'s phase-1 order (workpiece chain base first,
+  /// then tool chain base first), so the hot loop reads one contiguous block.
+  struct LinearJoint {
+    const AxisErrors* components = nullptr;  ///< null: no component errors
+    int index = 0;                           ///< AxisVector index of the axis
+    bool workpiece = false;
+    bool independent = false;
+    bool has_location_rotation = false;
+    double direction[3] = {};     ///< direction_parent
+    double offset_mm[3] = {};     ///< offset_parent_mm
+    double t_loc_mm[3] = {};      ///< t_parent_loc_mm
+    double R_loc[3][3] = {};      ///< R_parent_loc, R_loc[i][j] = R(i, j)
+    double r_meas_mm[3] = {};     ///< r_meas_mm
+  };
+  static constexpr int kMaxLinearJoints = 6;
+  std::array<LinearJoint, kMaxLinearJoints> linear_{};
+  int linear_work_ = 0;           ///< joints of the workpiece chain in linear_
+  int linear_count_ = 0;          ///< all joints in linear_
+  double linear_start_mm_[3] = {};  ///< spindle_offset - tool_length * tool_axis
+  double linear_origin_mm_[3] = {}; ///< workpiece_origin_mm
+
   Machine machine_;
   ErrorSet errors_;
   ModelOptions options_;
