@@ -57,13 +57,10 @@ void nominal_location_frames(const std::vector<Joint>& chain,
 }  // namespace
 
 namespace {
-// Rz(c) Ry(b) Rx(a) of the angles (ex, ey, ez), written element by element
-// so that it inlines into the hot loop; M is Eigen::Matrix3d or any type
-// with R(i, j).
-template <class M>
-[[gnu::always_inline]] inline void small_rotation_elements(double ex, double ey, double ez,
-                                                           M& R) {
-  double sa, ca, sb, cb, sc, cc;
+// sin and cos of the three small angles (ex, ey, ez) = (a, b, c).
+[[gnu::always_inline]] inline void small_sincos3(double ex, double ey, double ez, double& sa,
+                                                 double& ca, double& sb, double& cb, double& sc,
+                                                 double& cc) {
   if (std::abs(ex) < 1e-3 && std::abs(ey) < 1e-3 && std::abs(ez) < 1e-3) {
     // The common case, every angle in small_sincos's first range: the same
     // series, two angles per packed operation (bit-identical results).
@@ -80,6 +77,16 @@ template <class M>
     small_sincos(ey, sb, cb);
     small_sincos(ez, sc, cc);
   }
+}
+
+// Rz(c) Ry(b) Rx(a) of the angles (ex, ey, ez), written element by element
+// so that it inlines into the hot loop; M is Eigen::Matrix3d or any type
+// with R(i, j).
+template <class M>
+[[gnu::always_inline]] inline void small_rotation_elements(double ex, double ey, double ez,
+                                                           M& R) {
+  double sa, ca, sb, cb, sc, cc;
+  small_sincos3(ex, ey, ez, sa, ca, sb, cb, sc, cc);
   const double scsb = sc * sb, ccsb = cc * sb;
   R(0, 0) = cc * cb;
   R(0, 1) = ccsb * sa - sc * ca;
@@ -215,6 +222,9 @@ ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
           J.t_loc_mm[i] = bj.t_parent_loc_mm[i];
           J.r_meas_mm[i] = bj.r_meas_mm[i];
           for (int j = 0; j < 3; ++j) J.R_loc[i][j] = bj.R_parent_loc(i, j);
+          J.R_loc_col01[i][0] = bj.R_parent_loc(0, i);
+          J.R_loc_col01[i][1] = bj.R_parent_loc(1, i);
+          J.r_meas_pair[i][0] = J.r_meas_pair[i][1] = bj.r_meas_mm[i];
         }
       }
     }
@@ -423,6 +433,34 @@ struct M33 {
   [[gnu::always_inline]] double& operator()(int i, int j) { return m[i][j]; }
   [[gnu::always_inline]] double operator()(int i, int j) const { return m[i][j]; }
 };
+
+using v2d = double __attribute__((vector_size(16)));
+using v2i = long long __attribute__((vector_size(16)));
+[[gnu::always_inline]] inline v2d load2(const double (&p)[2]) { return v2d{p[0], p[1]}; }
+
+// small_rotation_elements' matrix, rows 0 and 1 of each column packed:
+// c_j = {R(0, j), R(1, j)}, and row 2.
+struct PackedRotation {
+  v2d c0, c1, c2;
+  double r20, r21, r22;
+};
+[[gnu::always_inline]] inline void small_rotation_packed(double ex, double ey, double ez,
+                                                         PackedRotation& R) {
+  double sa, ca, sb, cb, sc, cc;
+  small_sincos3(ex, ey, ez, sa, ca, sb, cb, sc, cc);
+  const v2d C = {cc, sc}, S = {sc, cc};
+  const v2d T = C * sb;  // {ccsb, scsb}
+  // x - y is x + (-y) in IEEE arithmetic, signed zeros included: the sign
+  // bit flipped in one lane turns the lane's addition into the subtraction.
+  const v2i neg0 = {static_cast<long long>(0x8000000000000000ULL), 0};
+  const v2i neg1 = {0, static_cast<long long>(0x8000000000000000ULL)};
+  R.c0 = C * cb;                                           // cc cb, sc cb
+  R.c1 = T * sa + reinterpret_cast<v2d>(reinterpret_cast<v2i>(S * ca) ^ neg0);  // ccsb sa - sc ca, scsb sa + cc ca
+  R.c2 = T * ca + reinterpret_cast<v2d>(reinterpret_cast<v2i>(S * sa) ^ neg1);  // ccsb ca + sc sa, scsb ca - cc sa
+  R.r20 = -sb;
+  R.r21 = cb * sa;
+  R.r22 = cb * ca;
+}
 }  // namespace
 
 Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir,
@@ -473,30 +511,65 @@ Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDire
     }
   };
 
-  double a[3], n[3];
-  for (int i = 0; i < 3; ++i) a[i] = n[i] = linear_start_mm_[i];
-  // Tool chain, spindle to base.
+  // Tool chain, spindle to base, rows 0 and 1 of the tip in one register
+  // (packed IEEE operations round as the scalar ones), row 2 beside it.
+  v2d a01 = {linear_start_mm_[0], linear_start_mm_[1]}, n01 = a01;
+  double a2 = linear_start_mm_[2], n2 = a2;
   for (int k = n_all - 1; k >= n_work; --k) {
     const LinearJoint& J = linear_[static_cast<size_t>(k)];
     const double q = u[J.index];
-    M33 R;
-    double delta[3];
-    joint_error(J, v[static_cast<size_t>(k)], q, R, delta);
-    double motion[3];
-    for (int i = 0; i < 3; ++i) motion[i] = q * J.direction[i];
-    for (int i = 0; i < 3; ++i) n[i] += motion[i];
-    double r[3];
-    for (int i = 0; i < 3; ++i) r[i] = R(i, 0) * a[0] + R(i, 1) * a[1] + R(i, 2) * a[2];
-    for (int i = 0; i < 3; ++i) a[i] = r[i] + delta[i];
-    for (int i = 0; i < 3; ++i) a[i] += motion[i];
-    for (int i = 0; i < 3; ++i) n[i] += J.offset_mm[i];
-    if (J.has_location_rotation) {
-      for (int i = 0; i < 3; ++i)
-        r[i] = J.R_loc[i][0] * a[0] + J.R_loc[i][1] * a[1] + J.R_loc[i][2] * a[2];
-      for (int i = 0; i < 3; ++i) a[i] = r[i];
+    PackedRotation R;
+    v2d d01;
+    double d2;
+    if (J.components) {
+      const std::array<double, kComponentCount>& e = v[static_cast<size_t>(k)];
+      small_rotation_packed(e[3], e[4], e[5], R);
+      d01 = v2d{e[0], e[1]};
+      d2 = e[2];
+      if (J.independent) {  // tool chain: r = r_meas
+        const v2d r0 = load2(J.r_meas_pair[0]), r1 = load2(J.r_meas_pair[1]),
+                  r2 = load2(J.r_meas_pair[2]);
+        const v2d r01 = {J.r_meas_mm[0], J.r_meas_mm[1]};
+        // Eigen's R * r: rows 0 and 1 as packets, left to right; row 2 as
+        // a scalar reduction, a0 + (a1 + a2).
+        const v2d p01 = (R.c0 * r0 + R.c1 * r1) + R.c2 * r2;
+        const double p2 = R.r20 * J.r_meas_mm[0] + (R.r21 * J.r_meas_mm[1] + R.r22 * J.r_meas_mm[2]);
+        d01 = d01 - (p01 - r01);
+        d2 = d2 - (p2 - J.r_meas_mm[2]);
+      }
+    } else {
+      R.c0 = v2d{1.0, 0.0}, R.c1 = v2d{0.0, 1.0}, R.c2 = v2d{0.0, 0.0};
+      R.r20 = 0.0, R.r21 = 0.0, R.r22 = 1.0;
+      d01 = v2d{0.0, 0.0};
+      d2 = 0.0;
     }
-    for (int i = 0; i < 3; ++i) a[i] += J.t_loc_mm[i];
+    const v2d m01 = q * v2d{J.direction[0], J.direction[1]};
+    const double m2 = q * J.direction[2];
+    n01 += m01;
+    n2 += m2;
+    {
+      const double x = a01[0], y = a01[1];
+      const v2d r01 = (R.c0 * x + R.c1 * y) + R.c2 * a2;
+      a2 = (R.r20 * x + R.r21 * y) + R.r22 * a2;
+      a01 = r01;
+    }
+    a01 += d01;
+    a2 += d2;
+    a01 += m01;
+    a2 += m2;
+    n01 += v2d{J.offset_mm[0], J.offset_mm[1]};
+    n2 += J.offset_mm[2];
+    if (J.has_location_rotation) {
+      const double x = a01[0], y = a01[1];
+      const v2d r01 = (load2(J.R_loc_col01[0]) * x + load2(J.R_loc_col01[1]) * y) +
+                      load2(J.R_loc_col01[2]) * a2;
+      a2 = (J.R_loc[2][0] * x + J.R_loc[2][1] * y) + J.R_loc[2][2] * a2;
+      a01 = r01;
+    }
+    a01 += v2d{J.t_loc_mm[0], J.t_loc_mm[1]};
+    a2 += J.t_loc_mm[2];
   }
+  double a[3] = {a01[0], a01[1], a2}, n[3] = {n01[0], n01[1], n2};
   // Workpiece chain, base to workpiece.
   for (int k = 0; k < n_work; ++k) {
     const LinearJoint& J = linear_[static_cast<size_t>(k)];

@@ -169,6 +169,9 @@ class ErrorModel {
     double t_loc_mm[3] = {};      ///< t_parent_loc_mm
     double R_loc[3][3] = {};      ///< R_parent_loc, R_loc[i][j] = R(i, j)
     double r_meas_mm[3] = {};     ///< r_meas_mm
+    // The same numbers laid out for two-lane (rows 0 and 1) arithmetic.
+    alignas(16) double R_loc_col01[3][2] = {};  ///< {R(0, j), R(1, j)}
+    alignas(16) double r_meas_pair[3][2] = {};  ///< {r_meas_mm[j], r_meas_mm[j]}
   };
   static constexpr int kMaxLinearJoints = 6;
   std::array<LinearJoint, kMaxLinearJoints> linear_{};
