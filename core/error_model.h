@@ -125,10 +125,6 @@ class ErrorModel {
 
   /// Number of evaluations that were clamped (OutsidePolicy::kClamp).
   std::uint64_t clamped_count() const { return clamped_->load(); }
-  /// Adds n to clamped_count() (evaluations made ahead, then used).
-  void add_clamped(std::uint64_t n) const {
-    if (n) clamped_->fetch_add(n, std::memory_order_relaxed);
-  }
 
  private:
   struct BoundJoint {

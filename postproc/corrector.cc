@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -92,7 +91,6 @@ Corrector::Corrector(const Machine& machine, const ErrorSet& errors,
     const AxisErrors* ax = errors.errors_of(machine.axis_order[static_cast<size_t>(a)]);
     bidirectional_[static_cast<size_t>(a)] = ax && ax->bidirectional();
   }
-  tool_length_mm_ = tool_length_mm;
   model_ = std::make_unique<ErrorModel>(std::move(with_tool), errors, ModelOptions{Formulation::kIndependent, outside});
   compute_bounds(machine, errors);
 }
@@ -122,7 +120,6 @@ Corrector::Corrector(const Machine& machine, const maps::VolumetricTable& table,
   if (!lu.isInvertible()) throw std::invalid_argument("the machine's linear axes do not span space");
   M_u_tip_ = lu.inverse();
   axis_shift_mm_.setZero();  // the machine file's tool: machine coordinates are axis values
-  tool_length_mm_ = machine.tool_length_mm;
   zero_ = true;
   for (int layer = 0; layer < table.layer_count() && zero_; ++layer)
     for (std::int64_t node = 0; node < table.node_count() && zero_; ++node) {
@@ -246,43 +243,11 @@ double Corrector::chord_deviation_bound(const Eigen::Vector3d& c0, const Eigen::
   return curvature_ * (c1 - c0).squaredNorm() / 8.0;
 }
 
-Eigen::Vector3d Corrector::model_error(const Eigen::Vector3d& p, const ApproachDirections& dir,
-                                       std::uint64_t* clamped_out) const {
-  const double u[3] = {p.x() + axis_shift_mm_.x(), p.y() + axis_shift_mm_.y(), p.z() + axis_shift_mm_.z()};
-  return M_u_tip_ * model_->tip_error_linear(u, dir, clamped_out);
-}
-
-namespace {
-bool same_bits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::memcmp(a.data(), b.data(), 3 * sizeof(double)) == 0;
-}
-}  // namespace
-
 Eigen::Vector3d Corrector::error_at(const Eigen::Vector3d& p, const ApproachDirections& dir) const {
   if (zero_) return Eigen::Vector3d::Zero();
   if (table_) return M_u_tip_ * table_error(p + axis_shift_mm_, dir);
-  if (memo_) {
-    // An evaluation made ahead for this point: the first entry from the
-    // cursor on that matches (entries the line did not need are passed).
-    for (const Evaluation* k = memo_->next; k != memo_->end; ++k)
-      if (k->dir == dir && same_bits(k->x_mm, p)) {
-        memo_->next = k + 1;
-        ++memo_->hits;
-        model_->add_clamped(k->clamped);
-        return k->e_mm;
-      }
-    ++memo_->misses;
-  }
-  return model_error(p, dir, nullptr);
-}
-
-Eigen::Vector3d Corrector::error_ahead(const Eigen::Vector3d& p, const ApproachDirections& dir,
-                                       std::vector<Evaluation>& made) const {
-  if (zero_) return Eigen::Vector3d::Zero();
-  std::uint64_t clamped = 0;
-  const Eigen::Vector3d e = model_error(p, dir, &clamped);
-  made.push_back({p, dir, e, clamped});
-  return e;
+  const double u[3] = {p.x() + axis_shift_mm_.x(), p.y() + axis_shift_mm_.y(), p.z() + axis_shift_mm_.z()};
+  return M_u_tip_ * model_->tip_error_linear(u, dir);
 }
 
 Eigen::Vector3d Corrector::error_with_play(const Eigen::Vector3d& p, const Eigen::Vector3d& h) const {
@@ -318,14 +283,26 @@ double Corrector::play_width_mm(int a, const Eigen::Vector3d& p) const {
   return std::abs(plus[static_cast<size_t>(own)] - minus[static_cast<size_t>(own)]);
 }
 
+Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal,
+                                       const ApproachDirections& dir) const {
+  if (zero_) return p_nominal;
+  return iterate(p_nominal, dir, p_nominal, 1e-12);
+}
+
+Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
+                                       const Eigen::Vector3d& nearby_correction,
+                                       double accuracy_mm) const {
+  if (zero_) return p_nominal;
+  return iterate(p_nominal, dir, p_nominal + nearby_correction, accuracy_mm);
+}
+
 // Fixed point of x = p - e(x): e varies by micrometres per 100 mm, so the
 // map is a strong contraction (factor L = lipschitz_bound(), about 1e-4).
 // Stops when the step is below 1e-12 mm, or, inside the bound box, when the
 // distance to the fixed point, at most L / (1 - L) times the step, is below
 // accuracy_mm.
-template <class ErrorAt>
 Eigen::Vector3d Corrector::iterate(const Eigen::Vector3d& p, const ApproachDirections& dir,
-                                   Eigen::Vector3d x, double accuracy_mm, const ErrorAt& error_at) const {
+                                   Eigen::Vector3d x, double accuracy_mm) const {
   const double L = lipschitz_;
   const double factor = L < 0.5 ? L / (1.0 - L) : std::numeric_limits<double>::infinity();
   for (int k = 0; k < 21; ++k) {
@@ -337,35 +314,6 @@ Eigen::Vector3d Corrector::iterate(const Eigen::Vector3d& p, const ApproachDirec
     if (done) break;
   }
   return x;
-}
-
-Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal,
-                                       const ApproachDirections& dir) const {
-  if (zero_) return p_nominal;
-  return iterate(p_nominal, dir, p_nominal, 1e-12, [this](const Eigen::Vector3d& x, const ApproachDirections& d) {
-    return error_at(x, d);
-  });
-}
-
-Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
-                                       const Eigen::Vector3d& nearby_correction,
-                                       double accuracy_mm) const {
-  if (zero_) return p_nominal;
-  return iterate(p_nominal, dir, p_nominal + nearby_correction, accuracy_mm,
-                 [this](const Eigen::Vector3d& x, const ApproachDirections& d) { return error_at(x, d); });
-}
-
-Eigen::Vector3d Corrector::command_ahead(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
-                                         const Eigen::Vector3d* nearby_correction, double accuracy_mm,
-                                         std::vector<Evaluation>& made) const {
-  if (zero_) return p_nominal;
-  if (!model_) throw std::logic_error("Corrector::command_ahead needs the model form");
-  const auto ahead = [this, &made](const Eigen::Vector3d& x, const ApproachDirections& d) {
-    return error_ahead(x, d, made);
-  };
-  // The same arguments as the two command_for forms.
-  if (!nearby_correction) return iterate(p_nominal, dir, p_nominal, 1e-12, ahead);
-  return iterate(p_nominal, dir, p_nominal + *nearby_correction, accuracy_mm, ahead);
 }
 
 }  // namespace volmap::post

@@ -13,9 +13,7 @@
 #pragma once
 
 #include <array>
-#include <cstdint>
 #include <memory>
-#include <vector>
 
 #include <Eigen/Core>
 
@@ -26,26 +24,6 @@ struct VolumetricTable;
 }
 
 namespace volmap::post {
-
-/// One evaluation of the error field made ahead (on another thread, by
-/// Corrector::command_ahead): error_at(x_mm, dir) is e_mm, and the model
-/// clamped `clamped` table lookups making it (OutsidePolicy::kClamp).
-struct Evaluation {
-  Eigen::Vector3d x_mm;
-  ApproachDirections dir{};
-  Eigen::Vector3d e_mm;
-  std::uint64_t clamped = 0;
-};
-
-/// Evaluations made ahead for one program line, in the order they were
-/// made; error_at takes an entry instead of evaluating when its point and
-/// directions are bit for bit the ones asked for (so the result is the same
-/// to the bit), and moves past it.
-struct EvaluationMemo {
-  const Evaluation* next = nullptr;
-  const Evaluation* end = nullptr;
-  std::uint64_t hits = 0, misses = 0;  ///< model evaluations taken / made while a memo was set
-};
 
 class Corrector {
  public:
@@ -98,24 +76,6 @@ class Corrector {
                               const Eigen::Vector3d& nearby_correction_mm,
                               double accuracy_mm = 1e-12) const;
 
-  /// command_for(p_nominal, dir) (nearby_correction null) or its warm-started
-  /// form, bit for bit, evaluating through the model without error_at's
-  /// memo and without counting clamped lookups: each evaluation is appended
-  /// to *made (with its clamped count) instead. For the model form only
-  /// (not a table). Throws what the model throws (std::out_of_range outside
-  /// the tables under OutsidePolicy::kError).
-  Eigen::Vector3d command_ahead(const Eigen::Vector3d& p_nominal_mm, const ApproachDirections& dir,
-                                const Eigen::Vector3d* nearby_correction_mm, double accuracy_mm,
-                                std::vector<Evaluation>& made) const;
-  /// error_at(p, dir) made ahead the same way (appended to *made).
-  Eigen::Vector3d error_ahead(const Eigen::Vector3d& p_machine_mm, const ApproachDirections& dir,
-                              std::vector<Evaluation>& made) const;
-  /// Whether the error comes from the model (command_ahead applies).
-  bool from_model() const { return model_ != nullptr; }
-  /// Sets (or with null, clears) the memo error_at consults first. The memo
-  /// is the caller's; one thread uses a Corrector while a memo is set.
-  void use_memo(EvaluationMemo* memo) const { memo_ = memo; }
-
   /// Bounds of the error field inside the box where every axis's tables
   /// hold (machine frame, any approach directions, docs/post.md "Bounds"):
   ///   |De(x) v| <= lipschitz_bound() |v|,  |D2e(x)[v, v]| <= curvature_bound() |v|^2.
@@ -133,8 +93,6 @@ class Corrector {
   double chord_deviation_bound(const Eigen::Vector3d& c0, const Eigen::Vector3d& c1) const;
   /// True when the machine has no errors at all (the output must equal the input).
   bool zero() const { return zero_; }
-  /// The tool length this corrector is for (mm; a table's: the machine file's tool).
-  double tool_length_mm() const { return tool_length_mm_; }
 
  private:
   std::unique_ptr<ErrorModel> model_;  ///< null for a table
@@ -144,17 +102,12 @@ class Corrector {
   Eigen::Matrix3d M_u_tip_;       ///< d(machine coordinate)/d(tip, workpiece frame)
   Eigen::Vector3d axis_shift_mm_;  ///< tool length compensation of this tool
   bool zero_ = false;
-  double tool_length_mm_ = 0.0;
   std::array<bool, 3> bidirectional_{};
   double lipschitz_ = 0.0, curvature_ = 0.0;
   Eigen::Vector3d box_lo_ = Eigen::Vector3d::Zero(), box_hi_ = Eigen::Vector3d::Zero();  ///< machine frame
   void compute_bounds(const Machine& machine, const ErrorSet& errors);
-  mutable EvaluationMemo* memo_ = nullptr;
-  Eigen::Vector3d model_error(const Eigen::Vector3d& p_machine_mm, const ApproachDirections& dir,
-                              std::uint64_t* clamped_out) const;
-  template <class ErrorAt>
   Eigen::Vector3d iterate(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
-                          Eigen::Vector3d x, double accuracy_mm, const ErrorAt& error_at) const;
+                          Eigen::Vector3d x, double accuracy_mm) const;
 };
 
 }  // namespace volmap::post

@@ -5,11 +5,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <condition_variable>
-#include <exception>
-#include <mutex>
-#include <optional>
-#include <thread>
 #include <string_view>
 #include <istream>
 #include <map>
@@ -66,116 +61,10 @@ bool settle_directions(const Vector3d& c0, const Vector3d& c1, const Vector3d& n
   return changed;
 }
 
-// Decimals of the numbers written under state s (--decimals, or 4 in mm and
-// 5 in inch), half their last unit, and how close a commanded point is to
-// the exact solution of x + e(x) = p: 1e-9 mm, at least 1e4 times finer
-// than the output resolution (1e-4 mm or 1e-5 inch by default); 1e-12 mm
-// for 6 decimals and more.
-int decimals_for(const PostOptions& o, const nc::State& s) {
-  if (o.decimals >= 0) return o.decimals;
-  return s.unit_mm > 1.0 ? 5 : 4;
-}
-double half_unit_of(int dec) {
-  static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
-  return dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
-}
-double solve_accuracy_for(int dec) { return dec <= 5 ? 1e-9 : 1e-12; }
-
-// A point corrected: command solves command + e(command, dir) = nominal (to
-// the solve accuracy).
-struct LastCorrected {
-  const Corrector* corrector = nullptr;
-  Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
-  ApproachDirections dir{};
-};
-
-// The warm start of the correction of `nominal` (with corrector c and
-// directions d): the correction of the last point corrected, moved on along
-// the line through the last two (the fixed point is the same, to the solve
-// accuracy; it takes a third to a half of the evaluations). False when the
-// last point was corrected with another corrector (a cold start then).
-bool warm_start(const LastCorrected& last, const LastCorrected& before_last, const Corrector& c,
-                const Vector3d& nominal, const ApproachDirections& d, Vector3d& guess) {
-  if (last.corrector != &c) return false;
-  guess = last.command - last.nominal;
-  if (before_last.corrector == &c && c.same_error(before_last.dir, last.dir) && c.same_error(last.dir, d)) {
-    const Vector3d a = last.nominal - before_last.nominal;
-    const double a2 = a.squaredNorm();
-    if (a2 > 0) {
-      const double t = std::clamp((nominal - last.nominal).dot(a) / a2, 0.0, 2.0);
-      guess += t * (guess - (before_last.command - before_last.nominal));
-    }
-  }
-  return true;
-}
-
 // One commanded point of the output and the nominal path parameter it ends.
 struct Piece {
   Vector3d command_mm;
   double s_end;
-};
-
-bool same_bits(const double* a, const double* b, std::size_t n) { return std::memcmp(a, b, n * sizeof(double)) == 0; }
-bool same_bits(const Vector3d& a, const Vector3d& b) { return same_bits(a.data(), b.data(), 3); }
-
-// PathSolver's state between two of its calls, its correctors named by
-// their tool length (has_corrector false: none yet): the same state and the
-// same inputs give the same results, to the bit, on any thread.
-struct SolverState {
-  struct Point {
-    bool has_corrector = false;
-    double tool_mm = 0.0;
-    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
-    ApproachDirections dir{};
-    bool operator==(const Point& o) const {
-      return has_corrector == o.has_corrector && same_bits(&tool_mm, &o.tool_mm, 1) &&
-             same_bits(nominal, o.nominal) && same_bits(command, o.command) && dir == o.dir;
-    }
-  };
-  Point last, before_last, start;  ///< start: segment's start deviation's point
-  double start_deviation = 0.0;
-  ApproachDirections last_dir{};
-  Vector3d emitted_mm = Vector3d::Zero();
-  bool emitted_known = false;
-  bool operator==(const SolverState& o) const {
-    return last == o.last && before_last == o.before_last && start == o.start &&
-           same_bits(&start_deviation, &o.start_deviation, 1) && last_dir == o.last_dir &&
-           same_bits(emitted_mm, o.emitted_mm) && emitted_known == o.emitted_known;
-  }
-};
-
-// A call of PathSolver::segment or ::position_command made ahead (on the
-// reading thread), with its inputs, the state it found and left, and its
-// results: the writer takes the results instead of solving again when it
-// makes the same call in the same state.
-struct SolverCall {
-  enum Kind : std::uint8_t { kNone, kSegment, kPosition } kind = kNone;
-  double tool_mm = 0.0, accuracy_mm = 0.0;
-  Vector3d from = Vector3d::Zero(), to = Vector3d::Zero(), start_cmd = Vector3d::Zero();
-  bool z_down = false;
-  SolverState before, after;
-  std::vector<Piece> pieces;  ///< kSegment
-  Vector3d cmd = Vector3d::Zero();  ///< kPosition, with its directions
-  ApproachDirections dir{};
-  std::uint64_t points_corrected = 0;  ///< by the call
-  double max_correction_mm = 0.0;
-};
-
-// A line read, lexed and interpreted ahead (two-thread post, on the reading
-// thread), with the evaluations of the error field made for it ahead: its
-// Block, BlockEffect and `made` keep their storage from batch to batch.
-struct LineAhead {
-  int number = 0;
-  bool cr = false, newline = false;  ///< its ending: "\r" before "\n", "\n"
-  std::exception_ptr error;          ///< what lexing or interpreting it threw
-  nc::Block block;
-  nc::BlockEffect fx;
-  bool known_before = false;  ///< position_known before the line
-  nc::State state;            ///< after the line
-  Vector3d work_offset = Vector3d::Zero();
-  double tool_length_mm = 0.0;   ///< of the evaluations made
-  std::vector<Evaluation> made;  ///< in the order made
-  SolverCall call;               ///< the line's solver call made ahead (kNone: none)
 };
 
 // A growable byte buffer written through a pointer: room(n) makes n bytes
@@ -223,179 +112,15 @@ void append_number(CharBuffer& w, double value, int dec) {
     w.append(nc::format_number(value, dec));
 }
 
-// The solution of x + e(x) = p along the program's moves, and the state it
-// carries from point to point (warm starts, approach directions, where the
-// controller stands): ProgramPost's, and the reading thread's (ReadAhead),
-// which runs the same code on the same inputs to make the evaluations of
-// the error field ahead (made_ set: each evaluation through the model is
-// appended there instead of looked up in the memo).
-class PathSolver {
- protected:
-  PathSolver(std::string file, double tolerance_mm, std::vector<Evaluation>* made = nullptr)
-      : file_(std::move(file)), tolerance_mm_(tolerance_mm), made_(made) {}
-
-  virtual ~PathSolver() = default;
-  Vector3d error_at(const Corrector& c, const Vector3d& x, const ApproachDirections& d) const {
-    return made_ ? c.error_ahead(x, d, *made_) : c.error_at(x, d);
-  }
-  /// The corrector of a tool length already met (the owner's map).
-  virtual const Corrector* corrector_of(double tool_mm) const = 0;
-  SolverState state() const {
-    const auto point = [](const Corrector* c, const Vector3d& nominal, const Vector3d& command,
-                          const ApproachDirections& dir) {
-      return SolverState::Point{c != nullptr, c ? c->tool_length_mm() : 0.0, nominal, command, dir};
-    };
-    SolverState st;
-    st.last = point(last_.corrector, last_.nominal, last_.command, last_.dir);
-    st.before_last = point(before_last_.corrector, before_last_.nominal, before_last_.command, before_last_.dir);
-    st.start = point(start_dev_.corrector, start_dev_.nominal, start_dev_.command, start_dev_.dir);
-    st.start_deviation = start_dev_.deviation;
-    st.last_dir = last_dir_;
-    st.emitted_mm = emitted_mm_;
-    st.emitted_known = emitted_known_;
-    return st;
-  }
-  void set_state(const SolverState& st) {
-    const auto corrector = [this](const SolverState::Point& p) {
-      return p.has_corrector ? corrector_of(p.tool_mm) : nullptr;
-    };
-    last_ = {corrector(st.last), st.last.nominal, st.last.command, st.last.dir};
-    before_last_ = {corrector(st.before_last), st.before_last.nominal, st.before_last.command, st.before_last.dir};
-    start_dev_ = {corrector(st.start), st.start.nominal, st.start.command, st.start.dir, st.start_deviation};
-    last_dir_ = st.last_dir;
-    emitted_mm_ = st.emitted_mm;
-    emitted_known_ = st.emitted_known;
-  }
-  /// The writer: whether the line's call made ahead is this call, in this
-  /// state; then the state it left and its counts are taken.
-  bool adopt(SolverCall::Kind kind, const Corrector& c, const Vector3d& from, const Vector3d& to,
-             const Vector3d& start_cmd, bool z_down) {
-    const SolverCall* a = adopt_;
-    if (!a || a->kind != kind) return false;
-    adopt_ = nullptr;  // one call a line
-    const double tool_mm = c.tool_length_mm();
-    if (!same_bits(&a->tool_mm, &tool_mm, 1) || !same_bits(&a->accuracy_mm, &accuracy_mm_, 1) ||
-        !same_bits(a->from, from) || !same_bits(a->to, to) || !same_bits(a->start_cmd, start_cmd) ||
-        a->z_down != z_down || !(a->before == state()))
-      return false;
-    set_state(a->after);
-    report_.points_corrected += a->points_corrected;
-    report_.max_correction_mm = std::max(report_.max_correction_mm, a->max_correction_mm);
-    ++adopted_;
-    return true;
-  }
-  /// The reader: records the call it makes next into *call.
-  void record_begin(SolverCall& call, SolverCall::Kind kind, const Corrector& c, const Vector3d& from,
-                    const Vector3d& to, const Vector3d& start_cmd, bool z_down) {
-    call.kind = kind;
-    call.tool_mm = c.tool_length_mm();
-    call.accuracy_mm = accuracy_mm_;
-    call.from = from;
-    call.to = to;
-    call.start_cmd = start_cmd;
-    call.z_down = z_down;
-    call.before = state();
-    report_.points_corrected = 0;
-    report_.max_correction_mm = 0.0;
-  }
-  void record_end(SolverCall& call) {
-    call.after = state();
-    call.points_corrected = report_.points_corrected;
-    call.max_correction_mm = report_.max_correction_mm;
-  }
-  Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d) {
-    Vector3d guess;
-    const bool warm = warm_start(last_, before_last_, c, nominal, d, guess);
-    const Vector3d cmd = made_ ? c.command_ahead(nominal, d, warm ? &guess : nullptr, accuracy_mm_, *made_)
-                         : warm ? c.command_for(nominal, d, guess, accuracy_mm_)
-                                : c.command_for(nominal, d);
-    before_last_ = last_;
-    last_ = {&c, nominal, cmd, d};
-    const double corr = (cmd - nominal).norm();
-    if (!std::isfinite(corr))
-      throw InputError(file_, current_line_, "the correction is not finite here; check the errors file");
-    report_.max_correction_mm = std::max(report_.max_correction_mm, corr);
-    ++report_.points_corrected;
-    return cmd;
-  }
-
-  /// The command of a positioning move (a rapid, or the traverse over a
-  /// hole and down) from nominal `from` to `to`, and its approach directions
-  /// in *d: an axis the nominal move moves takes its direction; one it does
-  /// not move but the correction makes creep takes the creep's direction, so
-  /// the command takes up its play that way (as segment() does for feed
-  /// moves) instead of leaving it half taken up; `z_down` fixes Z to -1 (a
-  /// cycle's feed into the hole).
-  Vector3d position_command(const Corrector& c, const Vector3d& from, const Vector3d& to, bool z_down,
-                            ApproachDirections& d) {
-    if (adopt(SolverCall::kPosition, c, from, to, emitted_mm_, z_down)) {
-      d = last_dir_;
-      return last_.command;  // the call's result: its last point corrected
-    }
-    d = directions_of(from, to, last_dir_);
-    if (z_down) d[2] = -1;
-    Vector3d cmd = command(c, to, d);
-    if (emitted_known_) {
-      ApproachDirections settled = d;
-      Vector3d to_flat = to, from_flat = from;
-      if (z_down) from_flat.z() = to_flat.z() = 0.0;  // Z's direction is the feed's
-      if (settle_directions(emitted_mm_, cmd, from_flat, to_flat, settled)) {
-        const bool again = !c.same_error(d, settled);
-        d = settled;
-        if (again) cmd = command(c, to, d);
-      }
-    }
-    last_dir_ = d;
-    return cmd;
-  }
-  const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
-
-  std::string file_;
-  int current_line_ = 0;
-  PostReport report_;
-  double tolerance_mm_;
-  /// How close a commanded point is to the exact solution (solve_accuracy_for),
-  /// set line by line.
-  double accuracy_mm_ = 1e-9;
-  std::vector<Evaluation>* made_;
-  const SolverCall* adopt_ = nullptr;  ///< the writer: the line's call made ahead
-  std::uint64_t adopted_ = 0;          ///< calls taken from the reader
-  Vector3d emitted_mm_ = Vector3d::Zero();  ///< last commanded position written
-  bool emitted_known_ = false;
-  ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
-  struct Pending {
-    double s0, s1;
-    Vector3d c0;
-    ApproachDirections dir0;  ///< axis directions on arrival at s0
-    bool stepped = false;     ///< the take-up step at s0 was commanded
-  };
-  std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
-  std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
-  LastCorrected last_, before_last_;  ///< the last two points corrected
-  /// The deviation of the actual tip at a piece's start (kept while a piece
-  /// is halved: the halves share their start).
-  struct StartDeviation {
-    const Corrector* corrector = nullptr;
-    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
-    ApproachDirections dir{};
-    double deviation = 0.0;
-  } start_dev_;
-};
-
-class ProgramPost : private PathSolver {
+class ProgramPost {
  public:
   ProgramPost(const std::string& file, std::ostream& out, const Machine& machine,
               const ErrorSet& errors, const nc::ProgramSetup& setup, const PostOptions& options,
               const maps::VolumetricTable* table = nullptr)
-      : PathSolver(file, options.tolerance_mm), out_(out), machine_(machine), errors_(errors), table_(table), options_(options),
-        interp_(setup, file), state_(&interp_.state()), work_offset_(&interp_.work_offset()) {}
+      : file_(file), out_(out), machine_(machine), errors_(errors), table_(table), options_(options),
+        interp_(setup, file) {}
 
   void line(std::string_view text, int number, bool newline);
-  /// The same for a line read, interpreted and evaluated ahead on another
-  /// thread (two-thread post): its interpreter state is the line's, its
-  /// evaluations of the error field are used where they fit.
-  void line(const LineAhead& ahead);
-  int current_line() const { return current_line_; }
   /// Writes out what emit() gathered (also on failure: what was done).
   void flush() {
     out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
@@ -403,39 +128,11 @@ class ProgramPost : private PathSolver {
   }
   // Output gathered in 64 KB pieces.
   static constexpr std::size_t kFlushAt = std::size_t{1} << 16;
-  PostReport report() const {
-    PostReport r = report_;
-    r.evaluations_ahead_taken = memo_.hits;
-    r.lines_solved_ahead = adopted_;
-    r.evaluations_not_ahead = memo_.misses;
-    return r;
-  }
+  const PostReport& report() const { return report_; }
 
  private:
-  const Corrector* corrector_of(double tool_mm) const override {
-    const auto it = correctors_.find(tool_mm);
-    return it == correctors_.end() ? nullptr : it->second.get();
-  }
-  /// The interpreter's state after the line (the line's own, in the
-  /// two-thread post) and its work offset.
-  const nc::State& state() const { return *state_; }
-  const Vector3d& work_offset() const { return *work_offset_; }
-  /// Sets the line's ending ("\r" kept before "\n"); returns the text without "\r".
-  std::string_view begin_line(std::string_view raw, int number, bool newline) {
-    current_line_ = number;
-    ++report_.lines;
-    // The line ending goes out as it came in (CRLF stays CRLF; a last line
-    // without a newline stays without one).
-    const bool cr = !raw.empty() && raw.back() == '\r';
-    line_ending_size_ = 0;
-    if (cr) line_ending_[line_ending_size_++] = '\r';
-    if (newline) line_ending_[line_ending_size_++] = '\n';
-    return cr ? raw.substr(0, raw.size() - 1) : raw;
-  }
-  /// The line's post-processing, once it has been interpreted.
-  void post_block(const nc::Block& b, const nc::BlockEffect& fx, bool known_before);
   const Corrector& corrector() {
-    const double L = state().tool_length_active ? state().tool_length_mm
+    const double L = interp_.state().tool_length_active ? interp_.state().tool_length_mm
                                                         : machine_.tool_length_mm;
     // The same tool as the line before (almost always): no map search.
     if (last_corrector_ && L == last_corrector_length_) return *last_corrector_;
@@ -456,8 +153,44 @@ class ProgramPost : private PathSolver {
     last_corrector_ = it->second.get();  // map nodes stay put: the pointer stays valid
     return *it->second;
   }
-  double solve_accuracy_mm() const { return solve_accuracy_for(decimals()); }
-  int decimals() const { return decimals_for(options_, state()); }
+  // How close a commanded point is to the exact solution of x + e(x) = p:
+  // 1e-9 mm, at least 1e4 times finer than the output resolution (1e-4 mm
+  // or 1e-5 inch by default); 1e-12 mm for 6 decimals and more.
+  double solve_accuracy_mm() const { return decimals() <= 5 ? 1e-9 : 1e-12; }
+  int decimals() const {
+    if (options_.decimals >= 0) return options_.decimals;
+    return interp_.state().unit_mm > 1.0 ? 5 : 4;
+  }
+  Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d) {
+    // Warm start from the correction of the last point corrected, moved on
+    // along the line through the last two (the fixed point is the same, to
+    // solve_accuracy_mm(); it takes a third to a half of the evaluations).
+    Vector3d cmd;
+    if (last_.corrector == &c) {
+      Vector3d guess = last_.command - last_.nominal;
+      if (before_last_.corrector == &c && c.same_error(before_last_.dir, last_.dir) &&
+          c.same_error(last_.dir, d)) {
+        const Vector3d a = last_.nominal - before_last_.nominal;
+        const double a2 = a.squaredNorm();
+        if (a2 > 0) {
+          const double t = std::clamp((nominal - last_.nominal).dot(a) / a2, 0.0, 2.0);
+          guess += t * (guess - (before_last_.command - before_last_.nominal));
+        }
+      }
+      cmd = c.command_for(nominal, d, guess, solve_accuracy_mm());
+    } else {
+      cmd = c.command_for(nominal, d);
+    }
+    before_last_ = last_;
+    last_ = {&c, nominal, cmd, d};
+    const double corr = (cmd - nominal).norm();
+    if (!std::isfinite(corr))
+      throw InputError(file_, current_line_, "the correction is not finite here; check the errors file");
+    report_.max_correction_mm = std::max(report_.max_correction_mm, corr);
+    ++report_.points_corrected;
+    return cmd;
+  }
+  const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
   void cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower, bool spaces,
                    int dec);
   void expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower, bool spaces,
@@ -484,19 +217,44 @@ class ProgramPost : private PathSolver {
   /// written, so that the rounding of one increment is made good by the
   /// next instead of adding up along the program.
   Vector3d reached(const Vector3d& cmd, bool g53) const {
-    const nc::State& st = state();
+    const nc::State& st = interp_.state();
     if (st.absolute) return cmd;
     Vector3d r;
     for (int a = 0; a < 3; ++a) r[a] = emitted_mm_[a] + written(program_value(a, cmd[a], g53), decimals()) * st.unit_mm;
     return r;
+  }
+  /// The command of a positioning move (a rapid, or the traverse over a
+  /// hole and down) from nominal `from` to `to`, and its approach directions
+  /// in *d: an axis the nominal move moves takes its direction; one it does
+  /// not move but the correction makes creep takes the creep's direction, so
+  /// the command takes up its play that way (as segment() does for feed
+  /// moves) instead of leaving it half taken up; `z_down` fixes Z to -1 (a
+  /// cycle's feed into the hole).
+  Vector3d position_command(const Corrector& c, const Vector3d& from, const Vector3d& to, bool z_down,
+                            ApproachDirections& d) {
+    d = directions_of(from, to, last_dir_);
+    if (z_down) d[2] = -1;
+    Vector3d cmd = command(c, to, d);
+    if (emitted_known_) {
+      ApproachDirections settled = d;
+      Vector3d to_flat = to, from_flat = from;
+      if (z_down) from_flat.z() = to_flat.z() = 0.0;  // Z's direction is the feed's
+      if (settle_directions(emitted_mm_, cmd, from_flat, to_flat, settled)) {
+        const bool again = !c.same_error(d, settled);
+        d = settled;
+        if (again) cmd = command(c, to, d);
+      }
+    }
+    last_dir_ = d;
+    return cmd;
   }
   bool ctrl_il_known_ = false;
   double ctrl_il_mm_ = 0.0;
   static double written(double value, int dec) { return std::strtod(nc::format_number(value, dec).c_str(), nullptr); }
   // Program value of axis a for commanded machine position v.
   double program_value(int a, double v_mm, bool g53) const {
-    const nc::State& s = state();
-    if (s.absolute) return (v_mm - (g53 ? 0.0 : work_offset()[a])) / s.unit_mm;
+    const nc::State& s = interp_.state();
+    if (s.absolute) return (v_mm - (g53 ? 0.0 : interp_.work_offset()[a])) / s.unit_mm;
     return (v_mm - emitted_mm_[a]) / s.unit_mm;
   }
   void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, CharBuffer& s) {
@@ -531,38 +289,59 @@ class ProgramPost : private PathSolver {
     end_line(p + text.size());
   }
 
+  std::string file_;
   std::ostream& out_;
   const Machine& machine_;
   const ErrorSet& errors_;
   const maps::VolumetricTable* table_;  ///< instead of errors_ when set
   PostOptions options_;
   nc::Interpreter interp_;
-  const nc::State* state_;          ///< state(): interp_'s, or the line ahead's
-  const Vector3d* work_offset_;     ///< work_offset(): likewise
-  EvaluationMemo memo_;             ///< the line ahead's evaluations (two-thread post)
   std::map<double, std::unique_ptr<Corrector>> correctors_;
   const Corrector* last_corrector_ = nullptr;  ///< corrector()'s last answer, for this tool length:
   double last_corrector_length_ = 0.0;
   nc::BlockEffect fx_;  ///< the line's effect (storage reused line after line)
-
+  PostReport report_;
+  Vector3d emitted_mm_ = Vector3d::Zero();  ///< last commanded position written
+  bool emitted_known_ = false;
+  ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
+  int current_line_ = 0;
   char line_ending_[2] = {};  ///< the line's ending as read: "", "\n", "\r" or "\r\n"
   std::size_t line_ending_size_ = 0;
   CharBuffer out_buffer_;
   nc::Block block_;  ///< the line being read (storage reused line after line)
+  struct Pending {
+    double s0, s1;
+    Vector3d c0;
+    ApproachDirections dir0;  ///< axis directions on arrival at s0
+    bool stepped = false;     ///< the take-up step at s0 was commanded
+  };
+  std::vector<Piece> pieces_;   ///< segment()'s result (storage reused)
+  std::vector<Pending> stack_;  ///< segment()'s work list (storage reused)
   CharBuffer words_, previous_words_, insert_;  ///< scratch of the writer (storage reused)
   CharBuffer expanded_line_;  ///< a line of an expanded cycle (storage reused)
+  /// The last point corrected: command solves command + e(command, dir) =
+  /// nominal (to solve_accuracy_mm()).
+  struct LastCorrected {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+  } last_, before_last_;
+  /// The deviation of the actual tip at a piece's start (kept while a piece
+  /// is halved: the halves share their start).
+  struct StartDeviation {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+    double deviation = 0.0;
+  } start_dev_;
 };
 
 // Pieces of one move at most (an arc's initial pieces, and all pieces).
 constexpr int kMaxArcPieces = 1 << 16;
 
-const std::vector<Piece>& PathSolver::segment(const Corrector& c, const nc::Motion& m,
+const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                         const Vector3d& start_cmd) {
-  if (const SolverCall* a = adopt_; a && adopt(SolverCall::kSegment, c, m.start_mm, m.end_mm, start_cmd, false)) {
-    pieces_ = a->pieces;
-    return pieces_;
-  }
-  const double tol = tolerance_mm_;
+  const double tol = options_.tolerance_mm;
   // Initial pieces: arcs so that the chord error is below tol / 4.
   int n0 = 1;
   if (m.kind == nc::MotionKind::kArc) {
@@ -616,7 +395,7 @@ const std::vector<Piece>& PathSolver::segment(const Corrector& c, const nc::Moti
         // the fixed point's residual; |dev(0)| too when the start is the last
         // point corrected with the same directions. Only when that bound
         // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
-        const double kResidual = 2 * accuracy_mm_ + 1e-12;
+        const double kResidual = 2 * solve_accuracy_mm() + 1e-12;
         double dev0;
         bool dev0_exact = true;  // else an upper bound only
         if (start_known && c.same_error(start.dir, d)) {
@@ -626,7 +405,7 @@ const std::vector<Piece>& PathSolver::segment(const Corrector& c, const nc::Moti
                    start_dev_.nominal == n0p && c.same_error(start_dev_.dir, d)) {
           dev0 = start_dev_.deviation;  // the same start, halved again
         } else {
-          dev0 = (p.c0 + error_at(c, p.c0, d) - n0p).norm();
+          dev0 = (p.c0 + c.error_at(p.c0, d) - n0p).norm();
           start_dev_ = {&c, n0p, p.c0, d, dev0};
         }
         const double chord = c.chord_deviation_bound(p.c0, c1);
@@ -663,7 +442,7 @@ const std::vector<Piece>& PathSolver::segment(const Corrector& c, const nc::Moti
       for (double t : {0.25, 0.5, 0.75}) {
         if (!sample) break;
         const Vector3d x = p.c0 + t * (c1 - p.c0);
-        const Vector3d actual = x + error_at(c, x, d);
+        const Vector3d actual = x + c.error_at(x, d);
         const Vector3d nominal = nc::point_on(m, p.s0 + t * (p.s1 - p.s0));
         if ((actual - nominal).norm() > tol) {
           ok = false;
@@ -708,9 +487,9 @@ const std::vector<Piece>& PathSolver::segment(const Corrector& c, const nc::Moti
 // next instead of adding up.
 void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
                               bool spaces, int dec) {
-  const nc::State& s = state();
+  const nc::State& s = interp_.state();
   const double unit = s.unit_mm;
-  const Vector3d& wo = work_offset();
+  const Vector3d& wo = interp_.work_offset();
   std::string extra;  // the block's P and Q words, for every repeat
   for (const nc::Word& w : b.words)
     if (w.letter == 'P' || w.letter == 'Q') {
@@ -777,7 +556,7 @@ void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, con
 // X Y Z R L P Q and polar words removed; the moves follow it.
 void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
                                bool spaces, int dec) {
-  const nc::State& s = state();
+  const nc::State& s = interp_.state();
   const int code = s.motion;
   if (code != 810 && code != 820 && code != 850 && code != 890)
     throw InputError(file_, current_line_,
@@ -851,7 +630,7 @@ void ProgramPost::expanded_feed(const Corrector& c, const Vector3d& from, const 
   m.kind = nc::MotionKind::kLinear;
   m.start_mm = from;
   m.end_mm = to;
-  m.feed = state().feed;
+  m.feed = interp_.state().feed;
   const std::vector<Piece>& pieces = segment(c, m, emitted_mm_);
   for (const Piece& piece : pieces) {
     CharBuffer& l = expanded_line_;
@@ -865,47 +644,21 @@ void ProgramPost::expanded_feed(const Corrector& c, const Vector3d& from, const 
 }
 
 void ProgramPost::line(std::string_view raw, int number, bool newline) {
-  const std::string_view text = begin_line(raw, number, newline);
+  current_line_ = number;
+  ++report_.lines;
+  // The line ending goes out as it came in (CRLF stays CRLF; a last line
+  // without a newline stays without one).
+  const bool cr = !raw.empty() && raw.back() == '\r';
+  const std::string_view text = cr ? raw.substr(0, raw.size() - 1) : raw;
+  line_ending_size_ = 0;
+  if (cr) line_ending_[line_ending_size_++] = '\r';
+  if (newline) line_ending_[line_ending_size_++] = '\n';
   nc::lex_block_into(text, number, file_, block_);
+  const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
-  interp_.execute(block_, fx_);
-  work_offset_ = &interp_.work_offset();
-  post_block(block_, fx_, known_before);
-}
-
-void ProgramPost::line(const LineAhead& ahead) {
-  begin_line(ahead.cr ? "\r" : "", ahead.number, ahead.newline);
-  if (ahead.error) std::rethrow_exception(ahead.error);  // where line() would have thrown it
-  state_ = &ahead.state;
-  work_offset_ = &ahead.work_offset;
-  memo_.next = ahead.made.data();
-  memo_.end = ahead.made.data() + ahead.made.size();
-  // The evaluations were made with this line's tool; every evaluation of
-  // the model this line makes looks at them first (and is counted).
-  const Corrector* c = nullptr;
-  if (!table_) {
-    c = &corrector();
-    const double L = state().tool_length_active ? state().tool_length_mm : machine_.tool_length_mm;
-    if (L != ahead.tool_length_mm) memo_.next = memo_.end;
-    c->use_memo(&memo_);
-  }
-  adopt_ = ahead.call.kind != SolverCall::kNone ? &ahead.call : nullptr;
-  try {
-    post_block(ahead.block, ahead.fx, ahead.known_before);
-  } catch (...) {
-    if (c) c->use_memo(nullptr);
-    adopt_ = nullptr;
-    throw;
-  }
-  if (c) c->use_memo(nullptr);
-  adopt_ = nullptr;
-}
-
-void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool known_before) {
-  const std::string_view text = b.text;
-  const int number = current_line_;
-  accuracy_mm_ = solve_accuracy_mm();
-  if (!state().cycle_il_known) ctrl_il_known_ = false;
+  nc::BlockEffect& fx = fx_;
+  interp_.execute(b, fx);
+  if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();
   // The line goes out as written: the controller then stands where its
   // words say, the axes it does not name where we left them.
@@ -913,18 +666,18 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
     emit(text);
     if (fx.has_motion) {
       if (!emitted_known_ || fx.motion.kind == nc::MotionKind::kCycle) {
-        emitted_mm_ = state().position_mm;
+        emitted_mm_ = interp_.state().position_mm;
       } else {
-        const nc::State& st = state();
+        const nc::State& st = interp_.state();
         for (int a = 0; a < 3; ++a) {
           const nc::Word* w = b.find("XYZ"[a]);
           if (!w) continue;
-          emitted_mm_[a] = st.absolute ? w->value * st.unit_mm + (fx.g53 ? 0.0 : work_offset()[a])
+          emitted_mm_[a] = st.absolute ? w->value * st.unit_mm + (fx.g53 ? 0.0 : interp_.work_offset()[a])
                                        : emitted_mm_[a] + w->value * st.unit_mm;
         }
       }
     }
-    emitted_known_ = state().position_known;
+    emitted_known_ = interp_.state().position_known;
   };
   if (!fx.has_motion || c.zero() || b.block_delete) {
     // Block delete: the line may or may not run on the machine; it is
@@ -957,7 +710,8 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
   }
   const bool spaces = spaced;
   const int dec = decimals();
-  const double half_unit = half_unit_of(dec);
+  static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
+  const double half_unit = dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
 
   // Indices of the words this block states.
   auto index_of = [&](char L) {
@@ -973,12 +727,12 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
     if (idx >= 0)
       old_value = b.words[static_cast<size_t>(idx)].value;
     else
-      old_value = state().absolute ? program_value(a, emitted_mm_[a], fx.g53) : 0.0;
+      old_value = interp_.state().absolute ? program_value(a, emitted_mm_[a], fx.g53) : 0.0;
     return std::abs(program_value(a, cmd[a], fx.g53) - old_value) >= half_unit;
   };
 
   if (m.kind == nc::MotionKind::kRapid) {
-    if (!known_before && !state().position_known) {
+    if (!known_before && !interp_.state().position_known) {
       unchanged();  // partial rapid from an unknown position: nothing to correct
       return;
     }
@@ -990,7 +744,7 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
     return;
   }
   if (m.kind == nc::MotionKind::kCycle &&
-      (!fx.more_holes.empty() || !state().absolute || b.find('@') || b.find('^'))) {
+      (!fx.more_holes.empty() || !interp_.state().absolute || b.find('@') || b.find('^'))) {
     cycle_holes(b, fx, c, lower, spaces, dec);
     return;
   }
@@ -1000,7 +754,7 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
     nc::BlockEdit edit;
     std::string insert;
     bool changed = false;
-    const nc::State& s = state();
+    const nc::State& s = interp_.state();
     std::array<bool, 3> needed{};
     // A polar block (@ ^) is always rewritten as X Y: under G91 the
     // controller would apply its increments to the corrected point, not the
@@ -1042,8 +796,8 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
       // (the correction differs from hole to hole).
       const Vector3d r_nominal(m.end_mm.x(), m.end_mm.y(), m.r_mm);
       const Vector3d r_cmd = command(c, r_nominal, d);
-      const double r_new = (r_cmd.z() - work_offset()[2]) / s.unit_mm;
-      const double r_nom = (m.r_mm - work_offset()[2]) / s.unit_mm;
+      const double r_new = (r_cmd.z() - interp_.work_offset()[2]) / s.unit_mm;
+      const double r_nom = (m.r_mm - interp_.work_offset()[2]) / s.unit_mm;
       if (changed || std::abs(r_new - r_nom) >= half_unit) {
         // Z too, so both modal values are this hole's.
         if (index_of('Z') < 0 && insert.find(lower ? 'z' : 'Z') == std::string::npos) {
@@ -1060,7 +814,7 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
       // Where the controller ends: G99 at the R it reads, G98 at the initial
       // level or that R if higher.
       const double r_read_mm =
-          changed ? written(r_new, dec) * s.unit_mm + work_offset()[2] : m.r_mm;
+          changed ? written(r_new, dec) * s.unit_mm + interp_.work_offset()[2] : m.r_mm;
       cycle_clear_mm = s.g98 ? std::max(ctrl_il_mm_, r_read_mm) : r_read_mm;
     }
     if (!changed) {
@@ -1106,7 +860,7 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
       return;
     }
   }
-  const nc::State& s = state();
+  const nc::State& s = interp_.state();
   auto g93_share = [&](double s0, double s1, double step_mm) {
     // Inverse time: the piece takes its share of the block's time. A
     // take-up step at a reversal covers no nominal path: it takes the time
@@ -1190,293 +944,6 @@ void ProgramPost::post_block(const nc::Block& b, const nc::BlockEffect& fx, bool
   emitted_known_ = true;
 }
 
-// The reading thread of the two-thread post (PostOptions::threads): reads
-// the lines, lexes and interprets them, and makes ahead the evaluations of
-// the error field the writing thread will ask for, by running the writer's
-// PathSolver on the same inputs: the interpreter's motions, and where the
-// controller stands after each line (emitted_mm_: the last point written,
-// or the words of a line left unchanged), followed here without writing.
-// What it gets wrong costs time only: the writer takes an evaluation only
-// when its point and directions are bit for bit the ones it asks for
-// (Corrector::error_at), so the output is the one-thread output. It stops
-// following at what it does not model (canned cycles, G91), until a new
-// tool length starts the writer's solution cold again.
-class LineReader {
- public:
-  LineReader(const std::string& file, const nc::ProgramSetup& setup) : file_(file), interp_(setup, file) {}
-  /// Reads one line into *out (its error, if lexing or interpreting throws).
-  void line(std::string_view raw, int number, bool newline, LineAhead& out) {
-    out.number = number;
-    out.cr = !raw.empty() && raw.back() == '\r';
-    out.newline = newline;
-    out.error = nullptr;
-    out.made.clear();
-    try {
-      nc::lex_block_into(out.cr ? raw.substr(0, raw.size() - 1) : raw, number, file_, out.block);
-      out.known_before = interp_.state().position_known;
-      interp_.execute(out.block, out.fx);
-    } catch (...) {
-      out.error = std::current_exception();
-      return;
-    }
-    out.state = interp_.state();
-    out.work_offset = interp_.work_offset();
-  }
-
- private:
-  std::string file_;
-  nc::Interpreter interp_;
-};
-
-class ReadAhead : private PathSolver {
- public:
-  ReadAhead(const std::string& file, const Machine& machine, const ErrorSet& errors, const PostOptions& options)
-      : PathSolver(file, options.tolerance_mm), machine_(machine), errors_(errors), options_(options) {}
-
-  /// Makes the line's evaluations ahead (a line read without error).
-  void evaluate(LineAhead& line) {
-    current_line_ = line.number;
-    made_ = &line.made;
-    line.call.kind = SolverCall::kNone;
-    try {
-      follow(line);
-    } catch (...) {
-      // The writer meets the same error (and reports it), or evaluates
-      // elsewhere: no longer in step with it.
-      in_step_ = false;
-      line.call.kind = SolverCall::kNone;
-    }
-  }
-
- private:
-  const Corrector* corrector_of(double tool_mm) const override {
-    const auto it = correctors_.find(tool_mm);
-    return it == correctors_.end() ? nullptr : it->second.get();
-  }
-  const Corrector& corrector(double tool_length_mm) {
-    if (last_corrector_ && tool_length_mm == last_length_) return *last_corrector_;
-    auto it = correctors_.find(tool_length_mm);
-    if (it == correctors_.end())
-      it = correctors_
-               .emplace(tool_length_mm,
-                        std::make_unique<Corrector>(machine_, errors_, tool_length_mm, options_.outside))
-               .first;
-    last_length_ = tool_length_mm;
-    last_corrector_ = it->second.get();
-    return *last_corrector_;
-  }
-  // ProgramPost's program_value (G90) and needs_word: does axis a need a
-  // new word to command cmd?
-  static double program_value(const LineAhead& it, int a, double v_mm) {
-    return (v_mm - (it.fx.g53 ? 0.0 : it.work_offset[a])) / it.state.unit_mm;
-  }
-  bool needs_word(const LineAhead& it, int a, const Vector3d& cmd, double half_unit) const {
-    const nc::Word* w = it.block.find("XYZ"[a]);
-    const double old_value = w ? w->value : program_value(it, a, emitted_mm_[a]);
-    return std::abs(program_value(it, a, cmd[a]) - old_value) >= half_unit;
-  }
-  // Whether the writer writes the same axis words for cmd as for `before`
-  // (then it leaves the piece out).
-  static bool same_words(const LineAhead& it, const Vector3d& cmd, const Vector3d& before, int dec) {
-    for (int a = 0; a < 3; ++a) {
-      char x[nc::kNumberRoom], y[nc::kNumberRoom];
-      const char* xe = nc::format_number_fast(program_value(it, a, cmd[a]), dec, x);
-      const char* ye = nc::format_number_fast(program_value(it, a, before[a]), dec, y);
-      if (!xe || !ye) {
-        if (nc::format_number(program_value(it, a, cmd[a]), dec) !=
-            nc::format_number(program_value(it, a, before[a]), dec))
-          return false;
-      } else if (std::string_view(x, static_cast<std::size_t>(xe - x)) !=
-                 std::string_view(y, static_cast<std::size_t>(ye - y))) {
-        return false;
-      }
-    }
-    return true;
-  }
-  // ProgramPost's unchanged(): the controller stands where the words say.
-  void unchanged(const LineAhead& it) {
-    const nc::State& s = it.state;
-    if (it.fx.has_motion) {
-      if (!emitted_known_ || it.fx.motion.kind == nc::MotionKind::kCycle) {
-        emitted_mm_ = s.position_mm;
-      } else {
-        for (int a = 0; a < 3; ++a) {
-          const nc::Word* w = it.block.find("XYZ"[a]);
-          if (!w) continue;
-          emitted_mm_[a] = s.absolute ? w->value * s.unit_mm + (it.fx.g53 ? 0.0 : it.work_offset[a])
-                                      : emitted_mm_[a] + w->value * s.unit_mm;
-        }
-      }
-    }
-    emitted_known_ = s.position_known;
-  }
-  // The line as ProgramPost::post_block corrects it, for what is followed.
-  void follow(LineAhead& it) {
-    const nc::State& s = it.state;
-    const nc::BlockEffect& fx = it.fx;
-    it.tool_length_mm = s.tool_length_active ? s.tool_length_mm : machine_.tool_length_mm;
-    const Corrector& c = corrector(it.tool_length_mm);
-    if (!fx.has_motion || c.zero() || it.block.block_delete) {
-      unchanged(it);
-      return;
-    }
-    const nc::Motion& m = fx.motion;
-    if (m.kind == nc::MotionKind::kRapid && !it.known_before && !s.position_known) {
-      unchanged(it);
-      return;
-    }
-    if (!emitted_known_) emitted_mm_ = m.start_mm;
-    // A new tool: the writer starts its solution cold (warm_start), so
-    // does this one: in step again.
-    if (&c != last_motion_corrector_) in_step_ = true;
-    last_motion_corrector_ = &c;
-    if (!in_step_ || !s.absolute || m.kind == nc::MotionKind::kCycle || (m.kind != nc::MotionKind::kRapid && fx.stop_code)) {
-      in_step_ = false;
-      return;
-    }
-    const int dec = decimals_for(options_, s);
-    accuracy_mm_ = solve_accuracy_for(dec);
-    const double half_unit = half_unit_of(dec);
-    const bool polar = it.block.has('@') || it.block.has('^');
-    if (m.kind == nc::MotionKind::kRapid) {
-      ApproachDirections d;
-      record_begin(it.call, SolverCall::kPosition, c, m.start_mm, m.end_mm, emitted_mm_, false);
-      const Vector3d cmd = position_command(c, m.start_mm, m.end_mm, false, d);
-      record_end(it.call);
-      bool changed = polar;
-      for (int a = 0; a < 3 && !changed; ++a) changed = needs_word(it, a, cmd, half_unit);
-      if (!changed) {
-        unchanged(it);
-        return;
-      }
-      emitted_mm_ = cmd;
-      emitted_known_ = true;
-      return;
-    }
-    record_begin(it.call, SolverCall::kSegment, c, m.start_mm, m.end_mm, emitted_mm_, false);
-    const std::vector<Piece>& pieces = segment(c, m, emitted_mm_);
-    record_end(it.call);
-    it.call.pieces = pieces;
-    if (m.kind == nc::MotionKind::kLinear && pieces.size() == 1 && !polar) {
-      bool needed = false;
-      for (int a = 0; a < 3 && !needed; ++a) needed = needs_word(it, a, pieces[0].command_mm, half_unit);
-      if (!needed) {
-        unchanged(it);
-        return;
-      }
-    }
-    // The pieces written: a piece whose words repeat the last written one's
-    // is left out (not under G93).
-    std::size_t written = 0;
-    for (std::size_t k = 1; k < pieces.size(); ++k)
-      if (s.feed_mode == 930 || !same_words(it, pieces[k].command_mm, pieces[written].command_mm, dec)) written = k;
-    emitted_mm_ = pieces[written].command_mm;
-    emitted_known_ = true;
-  }
-
-  const Machine& machine_;
-  const ErrorSet& errors_;
-  PostOptions options_;
-  std::map<double, std::unique_ptr<Corrector>> correctors_;
-  const Corrector* last_corrector_ = nullptr;
-  double last_length_ = 0.0;
-  bool in_step_ = false;  ///< following the writer, until something not followed
-  const Corrector* last_motion_corrector_ = nullptr;
-};
-
-// The lines of `in`, split at '\n' out of a large buffer (getline's per-line
-// work and copies avoided; the buffer grows only to hold the longest line):
-// f(raw, number, newline) for each until it returns false.
-template <class F>
-void for_each_line(std::istream& in, F&& f) {
-  std::vector<char> buf(1 << 16);
-  std::size_t begin = 0, end = 0;
-  bool eof = false;
-  int number = 0;
-  for (;;) {
-    const char* nl = static_cast<const char*>(std::memchr(buf.data() + begin, '\n', end - begin));
-    if (nl) {
-      const auto at = static_cast<std::size_t>(nl - buf.data());
-      if (!f(std::string_view(buf.data() + begin, at - begin), ++number, true)) return;
-      begin = at + 1;
-      continue;
-    }
-    if (eof) {
-      if (begin < end) f(std::string_view(buf.data() + begin, end - begin), ++number, false);
-      return;
-    }
-    const std::size_t rest = end - begin;
-    std::memmove(buf.data(), buf.data() + begin, rest);
-    begin = 0;
-    end = rest;
-    if (end == buf.size()) buf.resize(2 * buf.size());
-    in.read(buf.data() + end, static_cast<std::streamsize>(buf.size() - end));
-    const auto got = static_cast<std::size_t>(in.gcount());
-    end += got;
-    if (got == 0) eof = true;
-  }
-}
-
-// The hand-over between the threads of the post: a ring of batches of
-// lines that pass the stages in order, each batch filled by the reader
-// (stage 0), then evaluated ahead (stage 1, when a thread of its own does
-// it), then taken by the writer (the last stage); a lock per batch of
-// kLines lines, not per line.
-class LineRing {
- public:
-  static constexpr std::size_t kBatches = 8, kLines = 512;
-  struct Batch {
-    std::vector<LineAhead> lines = std::vector<LineAhead>(kLines);
-    std::size_t count = 0;
-    bool last = false;  ///< nothing follows (the end, or a line that failed)
-  };
-  explicit LineRing(int stages) : stages_(stages) {}
-  /// Before any stage has started.
-  void set_stages(int stages) { stages_ = stages; }
-  /// The next batch for `stage` (stage 0: emptied, to fill), or null once
-  /// the writer has stopped (never for the writer itself).
-  Batch* next(int stage) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    const auto s = static_cast<std::size_t>(stage);
-    if (stage == 0) {
-      changed_.wait(lock, [&] { return stopped_ || passed_[0] - passed_[stages_ - 1] < kBatches; });
-    } else {
-      changed_.wait(lock, [&] { return (stopped_ && stage < stages_ - 1) || passed_[s] < passed_[s - 1]; });
-    }
-    if (stopped_ && stage < stages_ - 1) return nullptr;
-    Batch& b = ring_[passed_[s] % kBatches];
-    if (stage == 0) {
-      b.count = 0;
-      b.last = false;
-    }
-    return &b;
-  }
-  /// `stage` is done with its batch: on to the next stage.
-  void pass(int stage) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      ++passed_[static_cast<std::size_t>(stage)];
-    }
-    changed_.notify_all();
-  }
-  /// The writer stops (done or failed): the other stages stop at their next batch.
-  void stop() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stopped_ = true;
-    }
-    changed_.notify_all();
-  }
-
- private:
-  int stages_;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::array<Batch, kBatches> ring_;
-  std::array<std::uint64_t, 3> passed_{};  ///< batches each stage has passed on
-  bool stopped_ = false;
-};
-
 }  // namespace
 
 namespace {
@@ -1487,115 +954,40 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
     throw std::invalid_argument("--tolerance-um must be a positive finite number");
   if (table) Corrector check(machine, *table, options.outside);  // a wrong table fails before any output
   ProgramPost post(in_name, out, machine, errors, setup, options, table);
+  // Lines out of a large buffer (getline's per-line work and copies avoided);
+  // the buffer grows only to hold the longest line.
+  std::vector<char> buf(1 << 16);
+  std::size_t begin = 0, end = 0;
+  bool eof = false;
+  int number = 0;
   try {
-    bool one_thread = options.threads <= 1;
-    if (!one_thread) {
-      // Two or three threads: this one writes (ProgramPost); a second one
-      // reads, lexes and interprets (LineReader) and evaluates ahead
-      // (ReadAhead, or a third thread does that). The output is the
-      // one-thread output, byte for byte.
-      const bool evaluate = table == nullptr;
-      bool third = evaluate && options.threads >= 3;
-      LineRing ring(third ? 3 : 2);
-      std::exception_ptr reader_failed;  // what the reader threw outside a line (out of memory)
-      const auto read = [&] {
-        LineRing::Batch* batch = nullptr;
-        try {
-          LineReader reader(in_name, setup);
-          std::optional<ReadAhead> ahead;
-          if (evaluate && !third) ahead.emplace(in_name, machine, errors, options);
-          batch = ring.next(0);
-          if (!batch) return;
-          for_each_line(in, [&](std::string_view raw, int number, bool newline) {
-            LineAhead& line = batch->lines[batch->count++];
-            reader.line(raw, number, newline, line);
-            if (line.error) return false;  // the writer throws it there
-            if (ahead) ahead->evaluate(line);
-            if (batch->count == LineRing::kLines) {
-              ring.pass(0);
-              batch = ring.next(0);
-            }
-            return batch != nullptr;
-          });
-        } catch (...) {
-          reader_failed = std::current_exception();
-          if (!batch) batch = ring.next(0);
-        }
-        if (batch) {  // the last batch (it may be empty): the writer stops after it
-          batch->last = true;
-          ring.pass(0);
-        }
-      };
-      const auto evaluate_ahead = [&] {
-        std::optional<ReadAhead> ahead;
-        try {
-          ahead.emplace(in_name, machine, errors, options);
-        } catch (...) {  // the batches go on, not evaluated
-        }
-        for (;;) {
-          LineRing::Batch* batch = ring.next(1);
-          if (!batch) return;
-          if (ahead)
-            for (std::size_t k = 0; k < batch->count; ++k)
-              if (!batch->lines[k].error) ahead->evaluate(batch->lines[k]);
-          const bool last = batch->last;
-          ring.pass(1);
-          if (last) return;
-        }
-      };
-      std::thread reader, evaluator;
-      // The evaluation stage first (it waits for batches): without it the
-      // reader evaluates; without a reader one thread does it all.
-      if (third) {
-        try {
-          evaluator = std::thread(evaluate_ahead);
-        } catch (const std::system_error&) {
-          third = false;
-          ring.set_stages(2);
-        }
+    for (;;) {
+      const char* nl = static_cast<const char*>(std::memchr(buf.data() + begin, '\n', end - begin));
+      if (nl) {
+        const auto at = static_cast<std::size_t>(nl - buf.data());
+        post.line(std::string_view(buf.data() + begin, at - begin), ++number, true);
+        begin = at + 1;
+        continue;
       }
-      try {
-        reader = std::thread(read);
-      } catch (const std::system_error&) {
-        one_thread = true;
-        if (evaluator.joinable()) {
-          ring.stop();
-          evaluator.join();
-        }
+      if (eof) {
+        if (begin < end) post.line(std::string_view(buf.data() + begin, end - begin), ++number, false);
+        break;
       }
-      if (!one_thread) {
-        struct Join {  // on every way out: the other stages stop, and are waited for
-          LineRing& ring;
-          std::thread& reader;
-          std::thread& evaluator;
-          ~Join() {
-            ring.stop();
-            reader.join();
-            if (evaluator.joinable()) evaluator.join();
-          }
-
-        } join{ring, reader, evaluator};
-        const int writer = third ? 2 : 1;
-        for (bool last = false; !last;) {
-          const LineRing::Batch& batch = *ring.next(writer);
-          for (std::size_t k = 0; k < batch.count; ++k) post.line(batch.lines[k]);
-          last = batch.last;
-          ring.pass(writer);
-        }
-        // Set before the last batch was handed over: seen here.
-        if (reader_failed) std::rethrow_exception(reader_failed);
-      }
+      const std::size_t rest = end - begin;
+      std::memmove(buf.data(), buf.data() + begin, rest);
+      begin = 0;
+      end = rest;
+      if (end == buf.size()) buf.resize(2 * buf.size());
+      in.read(buf.data() + end, static_cast<std::streamsize>(buf.size() - end));
+      const auto got = static_cast<std::size_t>(in.gcount());
+      end += got;
+      if (got == 0) eof = true;
     }
-    if (one_thread)
-      for_each_line(in, [&](std::string_view raw, int number, bool newline) {
-        post.line(raw, number, newline);
-        return true;
-      });
   } catch (const std::out_of_range& e) {
     // An error table's range (the message names the table's file:line):
     // the block that left it is the program's line (docs/model.md).
     post.flush();
-    throw InputError(in_name, post.current_line(),
+    throw InputError(in_name, number,
                      std::string("this block leaves the error tables: ") + e.what() +
                          " (volmap post --clamp holds the end values)");
   } catch (...) {

@@ -44,11 +44,6 @@ struct PostOptions {
   /// out of it for G85 G89) keeps the tolerance too, not only the hole's
   /// bottom. Other cycles (pecking, spindle stops) are refused with it.
   bool expand_cycles = false;
-  /// 1: one thread. 2: a second thread reads, lexes and interprets the
-  /// program ahead and evaluates the error field ahead for straight moves
-  /// and rapids (docs/post.md "Speed"); the output is the same, byte for
-  /// byte. More than 2 is taken as 2.
-  int threads = 1;
 };
 
 struct PostReport {
@@ -57,14 +52,6 @@ struct PostReport {
   std::uint64_t lines_added = 0;
   std::uint64_t points_corrected = 0;
   double max_correction_mm = 0.0;
-  /// Two threads: evaluations of the error field made ahead and taken, and
-  /// those the writing thread made itself (ahead but not matching, or not
-  /// followed ahead: arcs, cycles, G91, split moves).
-  std::uint64_t evaluations_ahead_taken = 0;
-  std::uint64_t evaluations_not_ahead = 0;
-  /// Two threads: moves whose solution the reading thread made and the
-  /// writing thread took (the same call in the same state).
-  std::uint64_t lines_solved_ahead = 0;
 };
 
 PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
