@@ -503,6 +503,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       else if (starts) fail(b, g[kMotion], "canned cycle needs an R word (retract plane)");
       if ((mode == 830 || mode == 730) && !word('Q') && starts)
         fail(b, g[kMotion], "peck drilling needs a Q word (peck depth)");
+      // LinuxCNC (convert_cycle_g73/g83): "Negative or zero q value used".
+      if (const Word* q = word('Q'); q && (mode == 830 || mode == 730) && q->value <= 0)
+        fail(b, q, "the peck depth Q must be positive (LinuxCNC refuses a negative or zero Q)");
       if ((mode == 820 || mode == 860 || mode == 890) && !word('P') && starts)
         fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
       // LinuxCNC (convert_cycle) refuses cycles under G93.

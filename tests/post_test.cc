@@ -136,6 +136,10 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
       {"G0 X1 Y1 Z0\nF10 G81 X2 Y2 Z-1 R1 L2.5", "L (repeats)"},
       {"G0 X1 Y1 Z0\nF10 G81 X2 Y2 Z2 R1", "above the R plane"},
       {"G91 F10 G1 X1 Y1 Z1", "unknown position"},
+      // rs274: "Negative or zero q value used" (a starting block, and one
+      // that goes on with the cycle).
+      {"G0 X1 Y1 Z5\nF10 G83 X2 Y2 Z-1 R1 Q0", "Q must be positive"},
+      {"G0 X1 Y1 Z5\nF10 G73 X2 Y2 Z-1 R1 Q0.5\nX3 Q-0.2", "Q must be positive"},
   };
   for (const auto& [text, words] : cases) {
     try {
