@@ -364,6 +364,41 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   if (!motion_here && (word('I') || word('J') || word('K') || word('R')) && !is_cycle(s_.motion))
     fail(b, word('I') ? word('I') : word('J') ? word('J') : word('K') ? word('K') : word('R'),
          "arc words without axis words");
+  if (g[kMotion] && (g[kMotion]->code10 == 20 || g[kMotion]->code10 == 30) && !motion_here)
+    fail(b, g[kMotion], "G2/G3 with neither axis words nor a centre (I J K) or R; LinuxCNC refuses it: "
+                        "give the arc's end and centre, or select the mode in the block of the first arc");
+  // A word no code of the block uses: LinuxCNC refuses the block
+  // (interp_check.cc, check_other_codes, against the motion the block will
+  // make), so a program that has one is not a LinuxCNC program, and its
+  // post would be refused by the controller. M codes that read P Q L R
+  // (spindle orientation M19, overrides M50-M53, digital and analog I/O
+  // M62-M68, user M codes M100-M199) exempt the block, as in LinuxCNC.
+  {
+    const int motion_to_be = g[kMotion] ? g[kMotion]->code10 : (motion_here ? s_.motion : -1);
+    const bool arc = motion_to_be == 20 || motion_to_be == 30;
+    const bool cycle = motion_to_be >= 0 && is_cycle(motion_to_be);
+    bool m_reads_words = false;
+    for (const Word& w : b.words)
+      if (w.letter == 'M') {
+        const int c = w.code10 / 10;
+        m_reads_words = m_reads_words || c == 19 || (c >= 50 && c <= 53) || (c >= 61 && c <= 68) ||
+                        (c >= 100 && c <= 199);
+      }
+    const bool g4 = g[kNonModal] && g[kNonModal]->code10 == 40;
+    const bool g64 = g[kPathControl] && g[kPathControl]->code10 == 640;
+    const auto unused = [&](char L, bool used, const char* users) {
+      if (const Word* w = word(L); w && !used)
+        fail(b, w, fmt::format("{} word with no {} to use it; LinuxCNC refuses the block: remove it", L, users));
+    };
+    if (!m_reads_words) {
+      for (char L : {'I', 'J', 'K'}) unused(L, arc, "G2 or G3");
+      unused('R', arc || cycle, "G2, G3 or canned cycle");
+      unused('L', cycle, "canned cycle");
+      unused('P', g4 || g64 || arc || motion_to_be == 820 || motion_to_be == 860 || motion_to_be == 890,
+             "G2, G3, G4, G64, G82, G86 or G89");
+      unused('Q', g64 || motion_to_be == 730 || motion_to_be == 830, "G64, G73 or G83");
+    }
+  }
 
   if (motion_here) {
     const Eigen::Vector3d& wo = work_offset();
@@ -439,6 +474,16 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       static constexpr int kA0[3] = {0, 2, 1}, kA1[3] = {1, 0, 2}, kN[3] = {2, 1, 0};
       static constexpr char kOff0[3] = {'I', 'K', 'J'}, kOff1[3] = {'J', 'I', 'K'};
       const int a0 = kA0[p], a1 = kA1[p];
+      // LinuxCNC (convert_arc): "K word given for arc in xy plane" (J in
+      // xz, I in yz), and "Mixed radius ijk format for arc" for R with any
+      // of I J K.
+      static constexpr char kNormalOffset[3] = {'K', 'J', 'I'};
+      static constexpr const char* kPlaneName[3] = {"XY (G17)", "XZ (G18)", "YZ (G19)"};
+      if (const Word* w = word(kNormalOffset[p]); w && !word('R'))
+        fail(b, w, fmt::format("{} word given for an arc in the {} plane; LinuxCNC refuses it: remove it",
+                               kNormalOffset[p], kPlaneName[p]));
+      if (const Word* r = word('R'); r && (word('I') || word('J') || word('K')))
+        fail(b, r, "arc with both R and I/J/K; use one form");
       if (!given[static_cast<size_t>(a0)] && !given[static_cast<size_t>(a1)] && !word('R') &&
           !word(kOff0[p]) && !word(kOff1[p]))
         fail(b, nullptr, "arc without in-plane end point or centre");

@@ -11,8 +11,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <regex>
 #include <sstream>
+#include <tuple>
+
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -220,6 +224,92 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
     std::printf("%s: commanded points off the nominal path, as rs274 reads them: before %.2f um, after %.3f um\n",
                 k.program, before_um, after_um);
   }
+}
+
+// Random programs of the words volmap reads, as a fuzzer writes them (any
+// order, words no code uses, arcs with stray centres, cycles without their
+// words, zero and negative P Q L): volmap post refuses every program rs274
+// refuses, with file:line, accepts those rs274 accepts except where it
+// says a construct is not supported (or is a post-processing policy: a
+// stop code beside a feed move), and rs274 accepts every program volmap
+// writes. Found and fixed with it: words no code uses, K in a G17 arc, R
+// with I J K, a lone G2, a peck depth Q of zero or less.
+TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
+  require_rs274();
+  const std::string tbl = "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/simpockets.tbl";
+  const std::string machine = test::source_path("samples/machines/hsu-3axis.json");
+  const std::string errors = test::source_path("samples/errors/hsu-3axis.csv");
+  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_random_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::mt19937 rng(20261201);
+  const auto chance = [&](double p) { return std::uniform_real_distribution<double>(0, 1)(rng) < p; };
+  const auto pick = [&](std::initializer_list<const char*> v) {
+    return std::string(v.begin()[std::uniform_int_distribution<size_t>(0, v.size() - 1)(rng)]);
+  };
+  const auto number = [&](double lo, double hi) {
+    const int decimals = std::uniform_int_distribution<int>(0, 3)(rng);
+    return fmt::format("{:.{}f}", std::uniform_real_distribution<double>(lo, hi)(rng), decimals);
+  };
+  double wild = 1.0;  // a program of stray words, or (0.1) one of mostly plain moves
+  const auto block = [&] {
+    std::vector<std::string> words;
+    if (chance(0.35))
+      words.push_back(pick({"G0", "G1", "G2", "G3", "G2", "G3", "G81", "G82", "G83", "G73", "G85", "G89", "G80",
+                            "G86", "G1", "G0"}));
+    if (chance(0.15 * wild))
+      words.push_back(pick({"G90", "G91", "G20", "G21", "G17", "G18", "G19", "G98", "G99", "G93", "G94", "G90.1",
+                            "G91.1", "G54", "G55", "G43 H1", "G49", "G53", "G4 P0.5", "G61", "G64"}));
+    for (const char* L : {"X", "Y", "Z"})
+      if (chance(0.5)) words.push_back(L + number(-20, 20));
+    if (chance(0.05 * wild)) words.push_back(pick({"@", "^"}) + number(-20, 20));
+    for (const char* L : {"I", "J", "K", "R"})
+      if (chance(0.25 * wild)) words.push_back(L + number(-10, 10));
+    for (const auto& [L, lo, hi] : {std::tuple{"Q", -2.0, 5.0}, {"P", -1.0, 3.0}, {"L", -1.0, 4.0},
+                                    {"F", -10.0, 500.0}})
+      if (chance(0.06 * wild)) words.push_back(L + number(lo, hi));
+    if (chance(0.03 * wild)) words.push_back(pick({"M3 S1000", "M5", "M8", "M9", "M0", "M1"}));
+    std::shuffle(words.begin(), words.end(), rng);
+    std::string b;
+    for (const std::string& w : words) b += (b.empty() ? "" : " ") + w;
+    return b;
+  };
+  const std::string in = (dir / "random.ngc").string(), out = (dir / "random-post.ngc").string();
+  int both = 0, refused = 0;
+  for (int n = 0; n < 300; ++n) {
+    wild = chance(0.5) ? 1.0 : 0.1;
+    std::string program = "G21 G90 G17 F200\nG0 X0 Y0 Z30\n";
+    for (int k = std::uniform_int_distribution<int>(1, 6)(rng); k > 0; --k) program += block() + "\n";
+    program += "M2\n";
+    std::ofstream(in, std::ios::binary) << program;
+    const bool rs274_ok = canonical(in, tbl).ok;
+    const std::string log = out + ".err";
+    const std::string cmd = test::volmap_binary() + " post --machine " + machine + " --errors " + errors +
+                            " --work-offset 250,200,100 --clamp --tool-table " + tbl + " " + in + " -o " + out +
+                            " 2>" + log;
+    fs::remove(out);
+    const bool volmap_ok = std::system(cmd.c_str()) == 0;
+    std::ifstream err_file(log);
+    const std::string err((std::istreambuf_iterator<char>(err_file)), std::istreambuf_iterator<char>());
+    SCOPED_TRACE(program + "volmap: " + err);
+    if (!rs274_ok) {
+      EXPECT_FALSE(volmap_ok) << "rs274 refuses the program, volmap post read it";
+      EXPECT_NE(err.find(in + ":"), std::string::npos);
+      ++refused;
+      continue;
+    }
+    if (!volmap_ok) {
+      const bool by_design = err.find("not supported") != std::string::npos ||
+                             err.find("stop code") != std::string::npos;
+      EXPECT_TRUE(by_design) << "rs274 reads the program, volmap post refused it";
+      continue;
+    }
+    ++both;
+    EXPECT_TRUE(canonical(out, tbl).ok) << "rs274 refuses volmap's output";
+  }
+  // Both kinds were met many times (the test has teeth both ways).
+  EXPECT_GT(both, 30);
+  EXPECT_GT(refused, 100);
+  std::printf("random programs: %d read by both, %d refused by rs274 (and volmap)\n", both, refused);
 }
 
 }  // namespace

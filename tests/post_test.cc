@@ -140,6 +140,19 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
       // that goes on with the cycle).
       {"G0 X1 Y1 Z5\nF10 G83 X2 Y2 Z-1 R1 Q0", "Q must be positive"},
       {"G0 X1 Y1 Z5\nF10 G73 X2 Y2 Z-1 R1 Q0.5\nX3 Q-0.2", "Q must be positive"},
+      // Words no code of the block uses (rs274: "I word with no G2, G3 ...
+      // to use it", "R word with no g code that uses it", ...).
+      {"G0 X1 Y1 Z5 I2", "I word with no G2 or G3"},
+      {"G0 X1 Y1 Z5\nF10 G1 X2 K1", "K word with no G2 or G3"},
+      {"G0 X1 Y1 Z5\nG91 Z-4 R-4", "R word with no G2, G3 or canned cycle"},
+      {"G0 X1 Y1 Z5\nX2 P0.3", "P word with no"},
+      {"G0 X1 Y1 Z5\nX2 Q1", "Q word with no G64, G73 or G83"},
+      {"G0 X1 Y1 Z5\nF10 G1 X2 L3", "L word with no canned cycle"},
+      {"G0 X1 Y1 Z5\nG2", "neither axis words nor a centre"},
+      // rs274: "K word given for arc in xy plane", "Mixed radius ijk format".
+      {"G0 X0 Y0 Z5\nF10 G2 X10 Y0 I5 J0 K1", "K word given for an arc in the XY (G17) plane"},
+      {"G0 X0 Y0 Z5\nF10 G18 G2 X10 Z5 I5 K0 J1", "J word given for an arc in the XZ (G18) plane"},
+      {"G0 X0 Y0 Z5\nF10 G2 X10 Y0 R5 K1", "both R and I/J/K"},
   };
   for (const auto& [text, words] : cases) {
     try {
