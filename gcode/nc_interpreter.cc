@@ -293,6 +293,7 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     s_.selected_tool = static_cast<int>(t->value);
   }
   if (m[kMTool]) s_.tool = s_.selected_tool;
+  if (m[kMSpindle]) s_.spindle_turning = m[kMSpindle]->code10 == 30 || m[kMSpindle]->code10 == 40;
   if (g[kNonModal] && g[kNonModal]->code10 == 40 && !word('P'))
     fail(b, g[kNonModal], "G4 dwell needs a P word (seconds)");
   if (g[kPlane]) s_.plane = (g[kPlane]->code10 - 170) / 10;
@@ -499,8 +500,11 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         const double R = r->value * s_.unit_mm;
         const Eigen::Vector2d d = e2 - s2;
         const double half = d.norm() / 2.0;
-        if (half < 1e-9) fail(b, r, "R-form arc with the end point at the start: a full circle needs I/J/K");
-        if (std::abs(R) < half - 1e-6) fail(b, r, "arc radius R is smaller than half the chord; fix R or the end point");
+        if (half == 0.0) fail(b, r, "R-form arc with the end point at the start: a full circle needs I/J/K");
+        // LinuxCNC (arc_data_r): R may fall short of half the chord by
+        // RADIUS_TOLERANCE (0.00005 inch, in program units).
+        if ((half - std::abs(R)) / s_.unit_mm > (s_.unit_mm > 1.0 ? 0.00005 : 0.00005 * 25.4))
+          fail(b, r, "arc radius R is smaller than half the chord; fix R or the end point");
         const double h = std::sqrt(std::max(0.0, R * R - half * half));
         const Eigen::Vector2d mid = (s2 + e2) / 2.0;
         const Eigen::Vector2d perp(-d.y() / d.norm(), d.x() / d.norm());
@@ -518,12 +522,22 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
           c2 = s2 + Eigen::Vector2d(i0 ? i0->value * s_.unit_mm : 0.0, i1 ? i1->value * s_.unit_mm : 0.0);
         }
         const double r_start = (s2 - c2).norm(), r_end = (e2 - c2).norm();
-        // LinuxCNC's tolerance: 0.05 mm absolute or 0.1 % relative.
-        if (std::abs(r_start - r_end) > std::max(0.05, 0.001 * r_start))
+        // LinuxCNC's rule (interp_arc.cc arc_data_ijk, in program units):
+        // a radius below RADIUS_TOLERANCE is a zero-radius arc; the two
+        // radii may differ by CENTER_ARC_RADIUS_TOLERANCE (0.02 sqrt 2 mm,
+        // 0.002 sqrt 2 inch, its default), or by more if that is at most
+        // 0.1 % (SPIRAL_RELATIVE_TOLERANCE) of the larger and at most 100
+        // times the tolerance.
+        const bool inch = s_.unit_mm > 1.0;
+        const double r1 = r_start / s_.unit_mm, r2 = r_end / s_.unit_mm;
+        const double zero_radius = inch ? 0.00005 : 0.00005 * 25.4;
+        const double spiral_abs = (inch ? 0.002 : 0.02) * std::sqrt(2.0);
+        if (r1 < zero_radius || r2 < zero_radius) fail(b, i0 ? i0 : i1, "arc of zero radius");
+        const double abs_err = std::abs(r1 - r2), rel_err = abs_err / std::max(r1, r2);
+        if (abs_err > spiral_abs * 100.0 || (rel_err > 0.001 && abs_err > spiral_abs))
           fail(b, i0 ? i0 : i1, fmt::format("radius to end of arc ({:.4f} mm) differs from radius to start "
-                                            "({:.4f} mm); fix the centre or the end point",
+                                            "({:.4f} mm) by more than LinuxCNC allows; fix the centre or the end point",
                                             r_end, r_start));
-        if (r_start < 1e-9) fail(b, i0 ? i0 : i1, "arc of zero radius");
       }
       mo.center_mm = mo.start_mm;
       mo.center_mm[a0] = c2.x();
@@ -553,6 +567,10 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         fail(b, q, "the peck depth Q must be positive (LinuxCNC refuses a negative or zero Q)");
       if ((mode == 820 || mode == 860 || mode == 890) && !word('P') && starts)
         fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
+      if (mode == 860 && !s_.spindle_turning)
+        fail(b, g[kMotion] ? g[kMotion] : nullptr,
+             "G86 with the spindle stopped; LinuxCNC refuses it (\"Spindle not turning in g86\"): start it "
+             "with M3 or M4 first");
       // LinuxCNC (convert_cycle) refuses cycles under G93.
       if (s_.feed_mode == 930)
         fail(b, g[kMotion], "canned cycle under inverse time feed (G93); LinuxCNC refuses it: use G94");
@@ -632,7 +650,10 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   if (m[kMStop]) {
     effect.stop_code = true;
     const int c = m[kMStop]->code10;
-    if (c == 20 || c == 300) s_.ended = true;
+    if (c == 20 || c == 300) {
+      s_.ended = true;
+      s_.spindle_turning = false;
+    }
   }
 }
 

@@ -97,6 +97,9 @@ struct State {
   bool position_known = false; ///< false until every axis has been commanded
   std::array<bool, 3> axis_known{};
   bool ended = false;          ///< after M2 / M30
+  /// Spindle turning (M3 or M4 in effect; M5, M19 and the program's end
+  /// stop it): LinuxCNC's G86 needs it ("Spindle not turning in g86").
+  bool spindle_turning = false;
 };
 
 /// What one block did, for the post-processor: its motion (at most one), and

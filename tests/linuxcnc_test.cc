@@ -50,7 +50,15 @@ struct Canon {
 
 // Runs rs274 on a program and reads its canonical calls.
 Canon canonical(const std::string& program, const std::string& tool_table) {
-  const std::string out = program + ".canon";
+  // Written under this test run's temporary folder, never beside the program
+  // (LinuxCNC's own programs are in a system folder other runs share).
+  static const fs::path dir = [] {
+    const fs::path d = fs::path(::testing::TempDir()) / ("volmap_canon_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  static int count = 0;
+  const std::string out = (dir / (std::to_string(++count) + "-" + fs::path(program).filename().string() + ".canon")).string();
   const std::string cmd = "cd " + fs::path(program).parent_path().string() + " && rs274 " +
                           (tool_table.empty() ? "" : "-t " + tool_table + " ") + "-g " + program + " " + out +
                           " >" + out + ".log 2>&1";
@@ -223,6 +231,43 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
     EXPECT_LT(after_um, 1.25 + rs274_rounding_um);
     std::printf("%s: commanded points off the nominal path, as rs274 reads them: before %.2f um, after %.3f um\n",
                 k.program, before_um, after_um);
+  }
+}
+
+// Limits LinuxCNC sets, on both sides of each, run through rs274 and volmap
+// post: the radii of an I J K arc may differ by 0.02 sqrt 2 mm (0.002 sqrt 2
+// inch), or by more if that is at most 0.1 % of the radius; an R arc may
+// fall short of half its chord by 0.00005 inch; G86 needs the spindle
+// turning.
+TEST(LinuxCnc, ArcAndCycleLimitsAreLinuxCncs) {
+  require_rs274();
+  const struct {
+    const char* block;
+    bool accepted;
+  } cases[] = {
+      {"G2 X20.028 Y0 I10 J0", true},      // 0.028 mm apart
+      {"G2 X20.0284 Y0 I10 J0", false},    // 0.0284 mm, 0.28 %
+      {"G2 X200.05 Y0 I100 J0", true},     // 0.05 mm but 0.05 %
+      {"G2 X20.04 Y0 I10 J0", false},      // 0.04 mm, 0.4 % (volmap took up to 0.05 mm)
+      {"G2 X10 Y0 R4.999", true},          // 0.001 mm short
+      {"G2 X10 Y0 R4.998", false},         // 0.002 mm short
+      {"G20 G2 X1.0028 Y0 I0.5 J0", true},  // 0.0028 inch
+      {"G20 G2 X1.0029 Y0 I0.5 J0", false},
+      {"G86 X5 Y5 Z-3 R2 P0.5", false},    // spindle stopped
+      {"M3 S1000\nG86 X5 Y5 Z-3 R2 P0.5", true},
+  };
+  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_limits_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string in = (dir / "limit.ngc").string(), out = (dir / "limit-post.ngc").string();
+  for (const auto& k : cases) {
+    SCOPED_TRACE(k.block);
+    std::ofstream(in, std::ios::binary) << "G21 G90 G17 F200\nG0 X0 Y0 Z5\n" << k.block << "\nM2\n";
+    EXPECT_EQ(canonical(in, "").ok, k.accepted) << "rs274";
+    const std::string cmd = test::volmap_binary() + " post --machine " +
+                            test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
+                            test::source_path("samples/errors/hsu-3axis.csv") + " --work-offset 250,200,100 " + in +
+                            " -o " + out + " 2>/dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()) == 0, k.accepted) << "volmap post";
   }
 }
 
