@@ -26,6 +26,7 @@
 #include "gcode/nc_path.h"
 #include "postproc/five_axis_input.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/rs274.h"
 #include "tests/support/samples.h"
 
 namespace volmap {
@@ -173,7 +174,7 @@ TEST_P(RealFiveAxisProgram, PostedRs274AcceptsAndTheToolFollowsTheNominalPath) {
     GTEST_SKIP() << "rs274 not installed (apt-get install linuxcnc-uspace)";
   }
   const std::string canon = out + ".canon";
-  const std::string cmd = "rs274 -g " + out + " " + canon + " >" + canon + ".log 2>&1";
+  const std::string cmd = test::rs274_command("-g " + out + " " + canon) + " >" + canon + ".log 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::string rs_errors;
   const std::vector<Pose5> feeds = canonical_feeds(canon, rs_errors);
@@ -260,7 +261,7 @@ TEST(FiveAxisRs274, AptAndToolVectorOutputsAreAccepted) {
     const test::CliResult post = test::run_volmap("post --machine " + machine + " --errors " + errors + " " + in + " -o " + out);
     ASSERT_EQ(post.status, 0) << post.err;
     const std::string canon = out + ".canon";
-    ASSERT_EQ(std::system(("rs274 -g " + out + " " + canon + " >" + canon + ".log 2>&1").c_str()), 0);
+    ASSERT_EQ(std::system((test::rs274_command("-g " + out + " " + canon) + " >" + canon + ".log 2>&1").c_str()), 0);
     std::string rs_errors;
     const std::vector<Pose5> feeds = canonical_feeds(canon, rs_errors);
     EXPECT_TRUE(rs_errors.empty()) << name << ": " << rs_errors;

@@ -25,6 +25,7 @@
 #include "core/machine_json.h"
 #include "gcode/nc_path.h"
 #include "postproc/corrector.h"
+#include "tests/support/rs274.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -59,8 +60,9 @@ Canon canonical(const std::string& program, const std::string& tool_table) {
   }();
   static int count = 0;
   const std::string out = (dir / (std::to_string(++count) + "-" + fs::path(program).filename().string() + ".canon")).string();
-  const std::string cmd = "cd " + fs::path(program).parent_path().string() + " && rs274 " +
-                          (tool_table.empty() ? "" : "-t " + tool_table + " ") + "-g " + program + " " + out +
+  const std::string cmd = "cd " + fs::path(program).parent_path().string() + " && " +
+                          test::rs274_command((tool_table.empty() ? "" : "-t " + tool_table + " ") + "-g " + program +
+                                              " " + out) +
                           " >" + out + ".log 2>&1";
   Canon c;
   c.ok = std::system(cmd.c_str()) == 0;
