@@ -300,6 +300,7 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   if (g[kUnits]) s_.unit_mm = g[kUnits]->code10 == 200 ? 25.4 : 1.0;
   bool consumed_axes = false;
   if (g[kToolLength]) {
+    const double offset_before = s_.tool_length_active ? s_.tool_length_mm : 0.0;
     const int c = g[kToolLength]->code10;
     if (c == 490) {
       s_.tool_length_active = false;
@@ -312,12 +313,12 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       auto it = setup_.tool_length_mm.find(tool);
       if (it == setup_.tool_length_mm.end())
         fail(b, g[kToolLength], fmt::format("G43 uses tool {}, which the tool table does not list; "
-                                            "give its length with --tool-table", tool));
+                                            "give its offset with --tool-table", tool));
       s_.tool_length_active = true;
       s_.tool_length_mm = it->second;
     } else {  // G43.1: dynamic length from the Z word
       const Word* z = word('Z');
-      if (!z) fail(b, g[kToolLength], "G43.1 needs a Z word (the tool length)");
+      if (!z) fail(b, g[kToolLength], "G43.1 needs a Z word (the tool length offset)");
       s_.tool_length_active = true;
       s_.tool_length_mm = z->value * s_.unit_mm;
       consumed_axes = true;
@@ -325,6 +326,11 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         fail(b, word('X') ? word('X') : word('Y') ? word('Y') : polar_radius ? polar_radius : polar_angle,
              "G43.1 takes only Z here");
     }
+    // LinuxCNC: the axes stay, the controlled point (the tip of the tool
+    // now compensated) is where they put it: Z moves by minus the change
+    // of offset (rs274: after G43 H1 with a -135.11 mm offset at Z50, the
+    // current Z is 185.11).
+    s_.position_mm.z() -= (s_.tool_length_active ? s_.tool_length_mm : 0.0) - offset_before;
   }
   if (g[kCoordSystem]) {
     static constexpr int kCodes[9] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
@@ -702,7 +708,7 @@ void read_tool_table(const std::string& path, ProgramSetup& setup) {
         throw InputError(path, n, fmt::format("bad entry \"{}\"; expected letter and number (T1 P1 Z12.5)", tok));
       }
       if (!std::isfinite(v))  // std::stod reads nan and inf
-        throw InputError(path, n, fmt::format("bad entry \"{}\": not a finite number; give a length in mm", tok));
+        throw InputError(path, n, fmt::format("bad entry \"{}\": not a finite number; give the tool length offset in mm", tok));
       if (L == 'T' && (v < 0 || v != std::floor(v) || v > kMaxToolNumber))
         throw InputError(path, n, fmt::format("bad entry \"{}\": a tool number is an integer from 0 to {}",
                                               tok, kMaxToolNumber));

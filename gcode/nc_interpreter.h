@@ -40,7 +40,9 @@ struct ProgramSetup {
     zero.fill(Eigen::Vector3d::Zero());
     return zero;
   }();
-  /// Tool table: tool (pocket) number -> length, mm.
+  /// Tool table: tool (pocket) number -> tool length offset, mm (a LinuxCNC
+  /// .tbl Z: how much longer the tool is than the one whose offset is zero,
+  /// the machine file's tool).
   std::map<int, double> tool_length_mm;
   /// Where the tool stands when the program starts (machine coordinates, mm),
   /// when known: lets a program that never commands an axis (a 2D plasma
@@ -77,7 +79,10 @@ struct State {
   int motion = 0;              ///< G code x 10 of the modal motion (0, 10, 20, 30, 800+)
   int coord_system = 0;        ///< 0 = G54 .. 8 = G59.3
   bool tool_length_active = false;
-  double tool_length_mm = 0.0; ///< of the active compensation
+  /// The active tool length offset (G43 H, G43.1), mm; 0 under G49. As in
+  /// LinuxCNC, a change of it moves the controlled point, not the axes:
+  /// position_mm's Z changes by minus the change.
+  double tool_length_mm = 0.0;
   int tool = 0;                ///< T in the spindle (after M6)
   int selected_tool = 0;       ///< last T word
   /// Canned cycles return to the initial level (G98) or to R (G99).
@@ -138,7 +143,9 @@ class Interpreter {
 /// Reads a LinuxCNC parameter (.var) file's work offsets (parameters
 /// 5221-5223 for G54, 20 apart up to G59.3). Throws InputError.
 void read_var_file(const std::string& path, ProgramSetup& setup);
-/// Reads a LinuxCNC tool table (.tbl): "T1 P1 Z12.5 ... ;comment".
+/// Reads a LinuxCNC tool table (.tbl): "T1 P1 Z12.5 ... ;comment". Z is the
+/// tool length offset in mm, as LinuxCNC applies it: relative to the tool of
+/// offset zero, which volmap takes to be the machine file's tool.
 void read_tool_table(const std::string& path, ProgramSetup& setup);
 
 }  // namespace volmap::nc

@@ -132,19 +132,21 @@ class ProgramPost {
 
  private:
   const Corrector& corrector() {
-    const double L = interp_.state().tool_length_active ? interp_.state().tool_length_mm
-                                                        : machine_.tool_length_mm;
+    // The tool's length: the machine file's tool (the one of offset zero)
+    // plus the active tool length offset.
+    const double offset = interp_.state().tool_length_active ? interp_.state().tool_length_mm : 0.0;
+    const double L = machine_.tool_length_mm + offset;
     // The same tool as the line before (almost always): no map search.
     if (last_corrector_ && L == last_corrector_length_) return *last_corrector_;
     auto it = correctors_.find(L);
     if (it == correctors_.end()) {
-      if (table_ && L != machine_.tool_length_mm)
+      if (table_ && offset != 0.0)
         // The table's errors are those of the machine file's tool; angular
         // errors act on another tool through another lever.
         throw InputError(file_, current_line_,
-                         fmt::format("the tool length here is {:g} mm, but a compensation table holds the errors "
-                                     "of the machine file's {:g} mm tool only; post with --errors instead",
-                                     L, machine_.tool_length_mm));
+                         fmt::format("the tool length offset here is {:g} mm, but a compensation table holds the "
+                                     "errors of the machine file's {:g} mm tool only; post with --errors instead",
+                                     offset, machine_.tool_length_mm));
       it = correctors_.emplace(L, table_ ? std::make_unique<Corrector>(machine_, *table_, options_.outside)
                                          : std::make_unique<Corrector>(machine_, errors_, L, options_.outside))
                .first;
@@ -656,8 +658,14 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   nc::lex_block_into(text, number, file_, block_);
   const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
+  const double offset_before = interp_.state().tool_length_active ? interp_.state().tool_length_mm : 0.0;
   nc::BlockEffect& fx = fx_;
   interp_.execute(b, fx);
+  // A change of tool length offset moves the controlled point where the
+  // controller stands, as it moves the interpreter's (LinuxCNC).
+  if (const double offset = interp_.state().tool_length_active ? interp_.state().tool_length_mm : 0.0;
+      offset != offset_before)
+    emitted_mm_.z() -= offset - offset_before;
   if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();
   // The line goes out as written: the controller then stands where its

@@ -41,7 +41,8 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
     const nc::Block b = nc::lex_block(text, number, name);
     interp.execute(b, fx);
     if (!fx.has_motion) continue;
-    const double L = interp.state().tool_length_active ? interp.state().tool_length_mm : default_tool_mm;
+    // The machine file's tool (offset zero) plus the active tool length offset.
+    const double L = default_tool_mm + (interp.state().tool_length_active ? interp.state().tool_length_mm : 0.0);
     nc::Motion m = fx.motion;
     if (m.kind == nc::MotionKind::kRapid) {
       // Before X, Y and Z are all known the start is a guess: skip.

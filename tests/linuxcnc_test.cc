@@ -23,6 +23,8 @@
 
 #include "core/errors_csv.h"
 #include "core/machine_json.h"
+#include "gcode/nc_block.h"
+#include "gcode/nc_interpreter.h"
 #include "gcode/nc_path.h"
 #include "postproc/corrector.h"
 #include "tests/support/rs274.h"
@@ -233,6 +235,71 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
     EXPECT_LT(after_um, 1.25 + rs274_rounding_um);
     std::printf("%s: commanded points off the nominal path, as rs274 reads them: before %.2f um, after %.3f um\n",
                 k.program, before_um, after_um);
+  }
+}
+
+// Tool length offsets as LinuxCNC applies them: a .tbl Z (or G43.1's Z) is
+// how much longer the tool is than the one of offset zero, and a change of
+// offset moves the controlled point, not the axes (the current Z jumps by
+// minus the change), so moves that do not restate Z (G91 here) start from
+// there. volmap's interpreter, and the post's output run through rs274,
+// agree with rs274 on the input to its printed 4 decimals (plus the
+// correction, some micrometres, for the output). (The standalone rs274
+// does not jump when M6 and G43 share a block: after a tool change it
+// takes its last programmed point as where it stands, where a running
+// LinuxCNC asks the axes; volmap applies the change of offset either way.)
+TEST(LinuxCnc, ToolLengthOffsetsMoveTheControlledPointAsRs274Does) {
+  require_rs274();
+  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_tlo_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // rs274 reads its tool table in inches; volmap's in mm.
+  const std::string tbl_inch = (dir / "inch.tbl").string(), tbl_mm = (dir / "mm.tbl").string();
+  std::ofstream(tbl_inch) << "T1 P1 Z1.0 ;\nT2 P2 Z-0.5 ;\n";
+  std::ofstream(tbl_mm) << "T1 P1 Z25.4 ;\nT2 P2 Z-12.7 ;\n";
+  const std::string program =
+      "G21 G90 G17 F100\nG0 X0 Y0 Z50\nG43 H1\nG91 G1 Z-5\nT2 M6\nG43 H2\nG1 X2 Z-5\nG49\nG1 Z-5\n"
+      "G43.1 Z10\nG1 Y3 Z-5\nG90 G1 X10 Z0\nM2\n";
+  const std::string in = (dir / "tlo.ngc").string(), out = (dir / "tlo-post.ngc").string();
+  std::ofstream(in, std::ios::binary) << program;
+  const Canon rs = canonical(in, tbl_inch);
+  ASSERT_TRUE(rs.ok) << rs.errors;
+  // By hand: 50 - 25.4 - 5 = 19.6; + 25.4 + 12.7 - 5 = 52.7; - 12.7 - 5 =
+  // 35; - 10 - 5 = 20; then Z0.
+  const double want[] = {19.6, 52.7, 35.0, 20.0, 0.0};
+  ASSERT_EQ(rs.feeds.size(), 5u);
+  for (size_t k = 0; k < 5; ++k) EXPECT_NEAR(rs.feeds[k].end_mm.z(), want[k], 1e-4) << "rs274, feed " << k;
+  // volmap's interpreter, work offset zero.
+  nc::ProgramSetup setup;
+  nc::read_tool_table(tbl_mm, setup);
+  nc::Interpreter interp(setup, "tlo.ngc");
+  nc::BlockEffect fx;
+  std::istringstream lines(program);
+  std::string line;
+  std::vector<double> feeds_z;
+  for (int n = 1; std::getline(lines, line); ++n) {
+    interp.execute(nc::lex_block(line, n, "tlo.ngc"), fx);
+    if (fx.has_motion && fx.motion.kind == nc::MotionKind::kLinear) feeds_z.push_back(fx.motion.end_mm.z());
+  }
+  ASSERT_EQ(feeds_z.size(), 5u);
+  for (size_t k = 0; k < 5; ++k) EXPECT_NEAR(feeds_z[k], want[k], 1e-9) << "volmap, feed " << k;
+  // The post of it, run by rs274: the same points, moved by the correction.
+  const std::string cmd = test::volmap_binary() + " post --machine " +
+                          test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
+                          test::source_path("samples/errors/hsu-3axis.csv") + " --work-offset 250,200,150 --tool-table " +
+                          tbl_mm + " " + in + " -o " + out;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const Canon posted = canonical(out, tbl_inch);
+  ASSERT_TRUE(posted.ok) << posted.errors;
+  // The output reaches every feed end of the input, in order, within the
+  // correction (the take-up steps of lost motion, a few micrometres from
+  // where an offset change left the controlled point, come between).
+  size_t next = 0;
+  for (const nc::Motion& m : rs.feeds) {
+    while (next < posted.points.size() &&
+           !(posted.points[next].second && (posted.points[next].first - m.end_mm).norm() < 0.05))
+      ++next;
+    EXPECT_LT(next, posted.points.size()) << "the output never reaches " << m.end_mm.transpose();
+    ++next;
   }
 }
 

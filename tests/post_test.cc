@@ -398,7 +398,7 @@ TEST(Post, ToolLengthChangesTheLever) {
   std::istringstream csv("Z,EBZ\n0,100\n300,100\n");
   const ErrorSet e = read_errors_csv(csv, "ebz.csv");
   nc::ProgramSetup s = offset_setup(100, 100, 100);
-  s.tool_length_mm[2] = 150.0;  // 50 mm longer than the machine's 100 mm probe
+  s.tool_length_mm[2] = 50.0;  // offset: 50 mm longer than the machine's 100 mm probe
   const std::string out = post("G21\nG0 X0 Y0 Z0\nT2 M6 G43 H2\nG0 X1 Y0 Z0\n", e, s);
   // Independent form: measured with the 100 mm tool, the 150 mm one has a
   // 50 mm longer lever below the pivot: dx = -EBZ * 50 mm = -5 um.
@@ -563,8 +563,8 @@ TEST(PostTable, AnotherToolOrAnotherMachineIsRefused) {
   const ErrorModel model(m, hsu_errors());
   const maps::VolumetricTable table = maps::build_table(model, {50.0, 50.0, 50.0});
   nc::ProgramSetup s = offset_setup(250, 200, 100);
-  s.tool_length_mm[1] = m.tool_length_mm;        // the machine file's tool: fine
-  s.tool_length_mm[2] = m.tool_length_mm + 30.0;  // another one: its errors are not in the table
+  s.tool_length_mm[1] = 0.0;   // offset zero: the machine file's tool, fine
+  s.tool_length_mm[2] = 30.0;  // another one: its errors are not in the table
   auto run = [&](const std::string& program, const Machine& machine) {
     std::istringstream in(program);
     std::ostringstream out;
