@@ -426,5 +426,159 @@ TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
   std::printf("random programs: %d read by both, %d refused by rs274 (and volmap)\n", both, refused);
 }
 
+// Random programs that a CAM system could write (lines, arcs with exact
+// centres in all three planes, canned cycles, G20/G21, G91, polar moves,
+// G43/G49, G93), posted and run by rs274: rs274 and volmap accept the same
+// ones, rs274 accepts every output, and the output passes through every
+// point the input does (rs274's canonical end points, in order, within
+// 0.05 of the program's unit: the correction is micrometres).
+TEST(LinuxCnc, RandomCamProgramsPostedPassThroughTheSamePoints) {
+  require_rs274();
+  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_cam_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // rs274 reads its tool table in inches; volmap's in mm.
+  const std::string tbl_inch = (dir / "inch.tbl").string(), tbl_mm = (dir / "mm.tbl").string();
+  std::ofstream(tbl_inch) << "T1 P1 Z1.0 ;\n";
+  std::ofstream(tbl_mm) << "T1 P1 Z25.4 ;\n";
+  std::mt19937 rng(20261202);
+  const auto uniform = [&](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  const auto chance = [&](double p) { return uniform(0, 1) < p; };
+  const auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  const auto program = [&] {
+    std::string p = "G21 G90 G17 G94 F300\nG0 X10 Y10 Z20\n";
+    double x = 10, y = 10, z = 20;  // mm
+    bool inch = false, incremental = false;
+    int plane = 0;  // 0 XY, 1 XZ, 2 YZ
+    double active_offset_mm = 0.0;  // tool length offset (G43 H1: 25.4 mm)
+    for (int n = integer(3, 12); n > 0; --n) {
+      const double k = uniform(0, 1), u = inch ? 25.4 : 1.0;
+      const auto num = [&](double v) { return fmt::format("{:.{}f}", v, integer(0, 2) == 0 ? 1 : 4); };
+      if (k < 0.25) {
+        const double nx = x + uniform(-15, 15), ny = y + uniform(-15, 15), nz = z + uniform(-5, 5);
+        if (incremental)
+          p += "G1 X" + num((nx - x) / u) + " Y" + num((ny - y) / u) + " Z" + num((nz - z) / u) + "\n";
+        else
+          p += "G1 X" + num(nx / u) + " Y" + num(ny / u) + " Z" + num(nz / u) + "\n";
+        x = nx, y = ny, z = nz;
+      } else if (k < 0.30 && !incremental) {
+        plane = integer(0, 2);
+        p += plane == 0 ? "G17\n" : plane == 1 ? "G18\n" : "G19\n";
+      } else if (k < 0.45 && !incremental) {
+        // In-plane axes (a0, a1) and their centre words, as RS274NGC pairs them.
+        static constexpr int kA0[3] = {0, 2, 1}, kA1[3] = {1, 0, 2};
+        static constexpr char kW0[3] = {'I', 'K', 'J'}, kW1[3] = {'J', 'I', 'K'};
+        double pos[3] = {x, y, z};
+        const double r = uniform(2, 15), a0 = uniform(0, 2 * M_PI), sweep = uniform(0.3, 5);
+        const double c0 = pos[kA0[plane]] - r * std::cos(a0), c1 = pos[kA1[plane]] - r * std::sin(a0);
+        const bool cw = chance(0.5);
+        const double a1 = cw ? a0 - sweep : a0 + sweep;
+        double end[3] = {x, y, z};
+        end[kA0[plane]] = c0 + r * std::cos(a1);
+        end[kA1[plane]] = c1 + r * std::sin(a1);
+        if (chance(0.3)) end[3 - kA0[plane] - kA1[plane]] += uniform(-3, 3);
+        p += fmt::format("{} X{:.4f} Y{:.4f} Z{:.4f} {}{:.4f} {}{:.4f}\n", cw ? "G2" : "G3", end[0] / u, end[1] / u,
+                         end[2] / u, kW0[plane], (c0 - pos[kA0[plane]]) / u, kW1[plane], (c1 - pos[kA1[plane]]) / u);
+        x = end[0], y = end[1], z = end[2];
+      } else if (k < 0.55 && !incremental && plane == 0) {
+        static const char* kCycles[] = {"G81", "G82 P0.2", "G83 Q1.5", "G73 Q0.7", "G85", "G89 P0.1", "M3 S900 G86 P0.3"};
+        const double hz = z - uniform(3, 8), rz = z - uniform(0, 1), nx = x + uniform(-10, 10), ny = y + uniform(-10, 10);
+        p += fmt::format("{} {} X{:.4f} Y{:.4f} Z{:.4f} R{:.4f}{}\nG80\nG0 Z{:.4f}\n", chance(0.5) ? "G98" : "G99",
+                         kCycles[integer(0, 6)], nx / u, ny / u, hz / u, rz / u,
+                         chance(0.2) ? fmt::format(" L{}", integer(2, 3)) : "", z / u);
+        x = nx, y = ny;
+      } else if (k < 0.62) {
+        inch = !inch;
+        p += inch ? "G20\n" : "G21\n";
+      } else if (k < 0.68) {
+        incremental = !incremental;
+        p += incremental ? "G91\n" : "G90\n";
+      } else if (k < 0.73 && !incremental) {
+        x += uniform(-10, 10), y += uniform(-10, 10), z += uniform(0, 5);
+        p += fmt::format("G0 X{:.4f} Y{:.4f} Z{:.4f}\n", x / u, y / u, z / u);
+      } else if (k < 0.78 && !incremental && plane == 0) {
+        const double radius = std::hypot(x, y) + uniform(-3, 3);
+        const double angle = std::atan2(y, x) * 180 / M_PI + uniform(-20, 20);
+        p += fmt::format("G1 @{:.4f} ^{:.4f}\n", radius / u, angle);
+        x = radius * std::cos(angle * M_PI / 180), y = radius * std::sin(angle * M_PI / 180);
+      } else if (k < 0.83) {
+        static const char* kCodes[] = {"G43 H1", "G49", "M3 S2000", "M8", "M9", "G64 P0.01", "G61", "G4 P0.2"};
+        const std::string code = kCodes[integer(0, 7)];
+        p += code + "\n";
+        // The controlled point jumps by minus the change of offset (LinuxCNC).
+        const double offset_mm = code == "G43 H1" ? 25.4 : code == "G49" ? 0.0 : active_offset_mm;
+        z -= offset_mm - active_offset_mm;
+        active_offset_mm = offset_mm;
+      } else if (k < 0.88 && !incremental) {
+        p += fmt::format("G93 G1 X{:.4f} Y{:.4f} F{:.2f}\nG94 F300\n", (x + 3) / u, (y - 2) / u, uniform(5, 50));
+        x += 3, y -= 2;
+      } else {
+        const double nx = x + uniform(-5, 5);
+        p += fmt::format("X{:.4f}\n", incremental ? (nx - x) / u : nx / u);
+        x = nx;
+      }
+    }
+    return p + "M2\n";
+  };
+  // rs274's commanded end points (program units), in order.
+  const auto end_points = [](const std::string& canon_file) {
+    std::vector<Eigen::Vector3d> pts;
+    std::ifstream f(canon_file);
+    std::string line;
+    int plane = 0;
+    while (std::getline(f, line)) {
+      if (line.find("SELECT_PLANE(CANON_PLANE_XY)") != std::string::npos) plane = 0;
+      if (line.find("SELECT_PLANE(CANON_PLANE_XZ)") != std::string::npos) plane = 1;
+      if (line.find("SELECT_PLANE(CANON_PLANE_YZ)") != std::string::npos) plane = 2;
+      const bool arc = line.find("ARC_FEED(") != std::string::npos;
+      if (!arc && line.find("STRAIGHT_FEED(") == std::string::npos && line.find("STRAIGHT_TRAVERSE(") == std::string::npos)
+        continue;
+      std::vector<double> v;
+      std::stringstream ss(line.substr(line.find('(') + 1));
+      std::string tok;
+      while (std::getline(ss, tok, ',')) v.push_back(std::strtod(tok.c_str(), nullptr));
+      if (!arc) pts.emplace_back(v[0], v[1], v[2]);
+      else if (plane == 0) pts.emplace_back(v[0], v[1], v[5]);  // first X, second Y, axis Z
+      else if (plane == 1) pts.emplace_back(v[1], v[5], v[0]);  // first Z, second X, axis Y
+      else pts.emplace_back(v[5], v[0], v[1]);                  // first Y, second Z, axis X
+    }
+    return pts;
+  };
+  const std::string in = (dir / "cam.ngc").string(), out = (dir / "cam-post.ngc").string();
+  int both = 0;
+  for (int n = 0; n < 150; ++n) {
+    const std::string text = program();
+    std::ofstream(in, std::ios::binary) << text;
+    const std::string canon_in = (dir / "cam.canon").string(), canon_out = (dir / "cam-post.canon").string();
+    const bool rs274_ok =
+        std::system((test::rs274_command("-t " + tbl_inch + " -g " + in + " " + canon_in) + " >/dev/null 2>&1").c_str()) == 0;
+    const std::string log = out + ".err";
+    fs::remove(out);
+    const bool volmap_ok =
+        std::system((test::volmap_binary() + " post --machine " + test::source_path("samples/machines/hsu-3axis.json") +
+                     " --errors " + test::source_path("samples/errors/hsu-3axis.csv") +
+                     " --work-offset 250,200,150 --clamp --tool-table " + tbl_mm + " " + in + " -o " + out + " 2>" + log)
+                        .c_str()) == 0;
+    std::ifstream err_file(log);
+    const std::string err((std::istreambuf_iterator<char>(err_file)), std::istreambuf_iterator<char>());
+    SCOPED_TRACE(text + "volmap: " + err);
+    EXPECT_EQ(volmap_ok, rs274_ok);
+    if (!rs274_ok || !volmap_ok) continue;
+    ++both;
+    ASSERT_EQ(std::system((test::rs274_command("-t " + tbl_inch + " -g " + out + " " + canon_out) + " >/dev/null 2>&1")
+                              .c_str()),
+              0)
+        << "rs274 refuses volmap's output";
+    const std::vector<Eigen::Vector3d> a = end_points(canon_in), b = end_points(canon_out);
+    size_t next = 0;
+    for (const Eigen::Vector3d& p : a) {
+      while (next < b.size() && (b[next] - p).cwiseAbs().maxCoeff() >= 0.05) ++next;
+      ASSERT_LT(next, b.size()) << "the output never passes through " << p.transpose();
+      ++next;
+    }
+  }
+  EXPECT_GT(both, 100);
+  std::printf("random CAM programs: %d of 150 posted and run through the same points by rs274\n", both);
+}
+
 }  // namespace
 }  // namespace volmap
