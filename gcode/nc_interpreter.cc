@@ -300,7 +300,7 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   if (g[kUnits]) s_.unit_mm = g[kUnits]->code10 == 200 ? 25.4 : 1.0;
   bool consumed_axes = false;
   if (g[kToolLength]) {
-    const double offset_before = s_.tool_length_active ? s_.tool_length_mm : 0.0;
+    const double offset_before = s_.tool_length_mm;
     const int c = g[kToolLength]->code10;
     if (c == 490) {
       s_.tool_length_active = false;
@@ -330,7 +330,7 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     // now compensated) is where they put it: Z moves by minus the change
     // of offset (rs274: after G43 H1 with a -135.11 mm offset at Z50, the
     // current Z is 185.11).
-    s_.position_mm.z() -= (s_.tool_length_active ? s_.tool_length_mm : 0.0) - offset_before;
+    s_.position_mm.z() -= s_.tool_length_mm - offset_before;
   }
   if (g[kCoordSystem]) {
     static constexpr int kCodes[9] = {540, 550, 560, 570, 580, 590, 591, 592, 593};

@@ -79,7 +79,8 @@ struct State {
   int motion = 0;              ///< G code x 10 of the modal motion (0, 10, 20, 30, 800+)
   int coord_system = 0;        ///< 0 = G54 .. 8 = G59.3
   bool tool_length_active = false;
-  /// The active tool length offset (G43 H, G43.1), mm; 0 under G49. As in
+  /// The active tool length offset (G43 H, G43.1), mm; 0 under G49 (and
+  /// before any G43), so it is the offset in effect either way. As in
   /// LinuxCNC, a change of it moves the controlled point, not the axes:
   /// position_mm's Z changes by minus the change.
   double tool_length_mm = 0.0;

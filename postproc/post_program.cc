@@ -134,7 +134,7 @@ class ProgramPost {
   const Corrector& corrector() {
     // The tool's length: the machine file's tool (the one of offset zero)
     // plus the active tool length offset.
-    const double offset = interp_.state().tool_length_active ? interp_.state().tool_length_mm : 0.0;
+    const double offset = interp_.state().tool_length_mm;
     const double L = machine_.tool_length_mm + offset;
     // The same tool as the line before (almost always): no map search.
     if (last_corrector_ && L == last_corrector_length_) return *last_corrector_;
@@ -658,13 +658,12 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   nc::lex_block_into(text, number, file_, block_);
   const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
-  const double offset_before = interp_.state().tool_length_active ? interp_.state().tool_length_mm : 0.0;
+  const double offset_before = interp_.state().tool_length_mm;
   nc::BlockEffect& fx = fx_;
   interp_.execute(b, fx);
   // A change of tool length offset moves the controlled point where the
   // controller stands, as it moves the interpreter's (LinuxCNC).
-  if (const double offset = interp_.state().tool_length_active ? interp_.state().tool_length_mm : 0.0;
-      offset != offset_before)
+  if (const double offset = interp_.state().tool_length_mm; offset != offset_before)
     emitted_mm_.z() -= offset - offset_before;
   if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();

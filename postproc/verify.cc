@@ -42,7 +42,7 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
     interp.execute(b, fx);
     if (!fx.has_motion) continue;
     // The machine file's tool (offset zero) plus the active tool length offset.
-    const double L = default_tool_mm + (interp.state().tool_length_active ? interp.state().tool_length_mm : 0.0);
+    const double L = default_tool_mm + interp.state().tool_length_mm;
     nc::Motion m = fx.motion;
     if (m.kind == nc::MotionKind::kRapid) {
       // Before X, Y and Z are all known the start is a guess: skip.
