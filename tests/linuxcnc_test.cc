@@ -27,6 +27,7 @@
 #include "gcode/nc_interpreter.h"
 #include "gcode/nc_path.h"
 #include "postproc/corrector.h"
+#include "tests/support/cli_in_source.h"
 #include "tests/support/rs274.h"
 #include "tests/support/test_paths.h"
 
@@ -55,11 +56,7 @@ struct Canon {
 Canon canonical(const std::string& program, const std::string& tool_table) {
   // Written under this test run's temporary folder, never beside the program
   // (LinuxCNC's own programs are in a system folder other runs share).
-  static const fs::path dir = [] {
-    const fs::path d = fs::path(::testing::TempDir()) / ("volmap_canon_" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
+  static const fs::path dir = test::fresh_dir("canon");
   static int count = 0;
   const std::string out = (dir / (std::to_string(++count) + "-" + fs::path(program).filename().string() + ".canon")).string();
   const std::string cmd = "cd " + fs::path(program).parent_path().string() + " && " +
@@ -132,6 +129,28 @@ Canon canonical(const std::string& program, const std::string& tool_table) {
   return c;
 }
 
+// `volmap post` on the sample three-axis machine with its errors, args after
+// (work offset, input, -o output, ...), for std::system.
+std::string hsu_post_command(const std::string& args) {
+  return test::volmap_binary() + " post --machine " + test::source_path("samples/machines/hsu-3axis.json") +
+         " --errors " + test::source_path("samples/errors/hsu-3axis.csv") + " " + args;
+}
+
+// The same tool table twice, for rs274 (which reads it in inches) and for
+// volmap (mm): {inch file, mm file}, tools numbered from 1 with the offsets
+// given in inches.
+std::pair<std::string, std::string> tool_tables(const fs::path& dir, std::initializer_list<double> offsets_inch) {
+  const std::string inch = (dir / "inch.tbl").string(), mm = (dir / "mm.tbl").string();
+  std::ofstream fi(inch), fm(mm);
+  int tool = 0;
+  for (double z : offsets_inch) {
+    ++tool;
+    fi << fmt::format("T{0} P{0} Z{1} ;\n", tool, z);
+    fm << fmt::format("T{0} P{0} Z{1} ;\n", tool, z * 25.4);
+  }
+  return {inch, mm};
+}
+
 struct Case {
   const char* program;
   const char* extra_args;
@@ -158,8 +177,7 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
                         // the initial G99) in one program each.
                         {"tests/data/linuxcnc/polar.ngc", "", "hsu-3axis", {250, 200, 100}},
                         {"tests/data/linuxcnc/cycles.ngc", "", "hsu-3axis", {250, 200, 100}}};
-  const fs::path dir = fs::path(::testing::TempDir()) / "volmap_linuxcnc";
-  fs::create_directories(dir);
+  const fs::path dir = test::fresh_dir("linuxcnc");
   for (const Case& k : cases) {
     SCOPED_TRACE(k.program);
     const std::string machine = test::source_path(std::string("samples/machines/") + k.machine + ".json");
@@ -250,12 +268,8 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
 // LinuxCNC asks the axes; volmap applies the change of offset either way.)
 TEST(LinuxCnc, ToolLengthOffsetsMoveTheControlledPointAsRs274Does) {
   require_rs274();
-  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_tlo_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  // rs274 reads its tool table in inches; volmap's in mm.
-  const std::string tbl_inch = (dir / "inch.tbl").string(), tbl_mm = (dir / "mm.tbl").string();
-  std::ofstream(tbl_inch) << "T1 P1 Z1.0 ;\nT2 P2 Z-0.5 ;\n";
-  std::ofstream(tbl_mm) << "T1 P1 Z25.4 ;\nT2 P2 Z-12.7 ;\n";
+  const fs::path dir = test::fresh_dir("tlo");
+  const auto [tbl_inch, tbl_mm] = tool_tables(dir, {1.0, -0.5});
   const std::string program =
       "G21 G90 G17 F100\nG0 X0 Y0 Z50\nG43 H1\nG91 G1 Z-5\nT2 M6\nG43 H2\nG1 X2 Z-5\nG49\nG1 Z-5\n"
       "G43.1 Z10\nG1 Y3 Z-5\nG90 G1 X10 Z0\nM2\n";
@@ -283,10 +297,7 @@ TEST(LinuxCnc, ToolLengthOffsetsMoveTheControlledPointAsRs274Does) {
   ASSERT_EQ(feeds_z.size(), 5u);
   for (size_t k = 0; k < 5; ++k) EXPECT_NEAR(feeds_z[k], want[k], 1e-9) << "volmap, feed " << k;
   // The post of it, run by rs274: the same points, moved by the correction.
-  const std::string cmd = test::volmap_binary() + " post --machine " +
-                          test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
-                          test::source_path("samples/errors/hsu-3axis.csv") + " --work-offset 250,200,150 --tool-table " +
-                          tbl_mm + " " + in + " -o " + out;
+  const std::string cmd = hsu_post_command("--work-offset 250,200,150 --tool-table " + tbl_mm + " " + in + " -o " + out);
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const Canon posted = canonical(out, tbl_inch);
   ASSERT_TRUE(posted.ok) << posted.errors;
@@ -325,17 +336,13 @@ TEST(LinuxCnc, ArcAndCycleLimitsAreLinuxCncs) {
       {"G86 X5 Y5 Z-3 R2 P0.5", false},    // spindle stopped
       {"M3 S1000\nG86 X5 Y5 Z-3 R2 P0.5", true},
   };
-  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_limits_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const fs::path dir = test::fresh_dir("limits");
   const std::string in = (dir / "limit.ngc").string(), out = (dir / "limit-post.ngc").string();
   for (const auto& k : cases) {
     SCOPED_TRACE(k.block);
     std::ofstream(in, std::ios::binary) << "G21 G90 G17 F200\nG0 X0 Y0 Z5\n" << k.block << "\nM2\n";
     EXPECT_EQ(canonical(in, "").ok, k.accepted) << "rs274";
-    const std::string cmd = test::volmap_binary() + " post --machine " +
-                            test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
-                            test::source_path("samples/errors/hsu-3axis.csv") + " --work-offset 250,200,100 " + in +
-                            " -o " + out + " 2>/dev/null";
+    const std::string cmd = hsu_post_command("--work-offset 250,200,100 " + in + " -o " + out + " 2>/dev/null");
     EXPECT_EQ(std::system(cmd.c_str()) == 0, k.accepted) << "volmap post";
   }
 }
@@ -351,10 +358,7 @@ TEST(LinuxCnc, ArcAndCycleLimitsAreLinuxCncs) {
 TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
   require_rs274();
   const std::string tbl = "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/simpockets.tbl";
-  const std::string machine = test::source_path("samples/machines/hsu-3axis.json");
-  const std::string errors = test::source_path("samples/errors/hsu-3axis.csv");
-  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_random_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const fs::path dir = test::fresh_dir("random");
   std::mt19937 rng(20261201);
   const auto chance = [&](double p) { return std::uniform_real_distribution<double>(0, 1)(rng) < p; };
   const auto pick = [&](std::initializer_list<const char*> v) {
@@ -397,13 +401,11 @@ TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
     std::ofstream(in, std::ios::binary) << program;
     const bool rs274_ok = canonical(in, tbl).ok;
     const std::string log = out + ".err";
-    const std::string cmd = test::volmap_binary() + " post --machine " + machine + " --errors " + errors +
-                            " --work-offset 250,200,100 --clamp --tool-table " + tbl + " " + in + " -o " + out +
-                            " 2>" + log;
+    const std::string cmd =
+        hsu_post_command("--work-offset 250,200,100 --clamp --tool-table " + tbl + " " + in + " -o " + out + " 2>" + log);
     fs::remove(out);
     const bool volmap_ok = std::system(cmd.c_str()) == 0;
-    std::ifstream err_file(log);
-    const std::string err((std::istreambuf_iterator<char>(err_file)), std::istreambuf_iterator<char>());
+    const std::string err = test::file_bytes(log);
     SCOPED_TRACE(program + "volmap: " + err);
     if (!rs274_ok) {
       EXPECT_FALSE(volmap_ok) << "rs274 refuses the program, volmap post read it";
@@ -431,15 +433,11 @@ TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
 // G43/G49, G93), posted and run by rs274: rs274 and volmap accept the same
 // ones, rs274 accepts every output, and the output passes through every
 // point the input does (rs274's canonical end points, in order, within
-// 0.05 of the program's unit: the correction is micrometres).
+// 0.05 mm: the correction is micrometres).
 TEST(LinuxCnc, RandomCamProgramsPostedPassThroughTheSamePoints) {
   require_rs274();
-  const fs::path dir = fs::path(::testing::TempDir()) / ("volmap_cam_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  // rs274 reads its tool table in inches; volmap's in mm.
-  const std::string tbl_inch = (dir / "inch.tbl").string(), tbl_mm = (dir / "mm.tbl").string();
-  std::ofstream(tbl_inch) << "T1 P1 Z1.0 ;\n";
-  std::ofstream(tbl_mm) << "T1 P1 Z25.4 ;\n";
+  const fs::path dir = test::fresh_dir("cam");
+  const auto [tbl_inch, tbl_mm] = tool_tables(dir, {1.0});
   std::mt19937 rng(20261202);
   const auto uniform = [&](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
   const auto chance = [&](double p) { return uniform(0, 1) < p; };
@@ -519,60 +517,28 @@ TEST(LinuxCnc, RandomCamProgramsPostedPassThroughTheSamePoints) {
     }
     return p + "M2\n";
   };
-  // rs274's commanded end points (program units), in order.
-  const auto end_points = [](const std::string& canon_file) {
-    std::vector<Eigen::Vector3d> pts;
-    std::ifstream f(canon_file);
-    std::string line;
-    int plane = 0;
-    while (std::getline(f, line)) {
-      if (line.find("SELECT_PLANE(CANON_PLANE_XY)") != std::string::npos) plane = 0;
-      if (line.find("SELECT_PLANE(CANON_PLANE_XZ)") != std::string::npos) plane = 1;
-      if (line.find("SELECT_PLANE(CANON_PLANE_YZ)") != std::string::npos) plane = 2;
-      const bool arc = line.find("ARC_FEED(") != std::string::npos;
-      if (!arc && line.find("STRAIGHT_FEED(") == std::string::npos && line.find("STRAIGHT_TRAVERSE(") == std::string::npos)
-        continue;
-      std::vector<double> v;
-      std::stringstream ss(line.substr(line.find('(') + 1));
-      std::string tok;
-      while (std::getline(ss, tok, ',')) v.push_back(std::strtod(tok.c_str(), nullptr));
-      if (!arc) pts.emplace_back(v[0], v[1], v[2]);
-      else if (plane == 0) pts.emplace_back(v[0], v[1], v[5]);  // first X, second Y, axis Z
-      else if (plane == 1) pts.emplace_back(v[1], v[5], v[0]);  // first Z, second X, axis Y
-      else pts.emplace_back(v[5], v[0], v[1]);                  // first Y, second Z, axis X
-    }
-    return pts;
-  };
   const std::string in = (dir / "cam.ngc").string(), out = (dir / "cam-post.ngc").string();
   int both = 0;
   for (int n = 0; n < 150; ++n) {
     const std::string text = program();
     std::ofstream(in, std::ios::binary) << text;
-    const std::string canon_in = (dir / "cam.canon").string(), canon_out = (dir / "cam-post.canon").string();
-    const bool rs274_ok =
-        std::system((test::rs274_command("-t " + tbl_inch + " -g " + in + " " + canon_in) + " >/dev/null 2>&1").c_str()) == 0;
+    const Canon input = canonical(in, tbl_inch);
     const std::string log = out + ".err";
     fs::remove(out);
-    const bool volmap_ok =
-        std::system((test::volmap_binary() + " post --machine " + test::source_path("samples/machines/hsu-3axis.json") +
-                     " --errors " + test::source_path("samples/errors/hsu-3axis.csv") +
-                     " --work-offset 250,200,150 --clamp --tool-table " + tbl_mm + " " + in + " -o " + out + " 2>" + log)
-                        .c_str()) == 0;
-    std::ifstream err_file(log);
-    const std::string err((std::istreambuf_iterator<char>(err_file)), std::istreambuf_iterator<char>());
+    const bool volmap_ok = std::system(hsu_post_command("--work-offset 250,200,150 --clamp --tool-table " + tbl_mm + " " +
+                                                        in + " -o " + out + " 2>" + log)
+                                           .c_str()) == 0;
+    const std::string err = test::file_bytes(log);
     SCOPED_TRACE(text + "volmap: " + err);
-    EXPECT_EQ(volmap_ok, rs274_ok);
-    if (!rs274_ok || !volmap_ok) continue;
+    EXPECT_EQ(volmap_ok, input.ok);
+    if (!input.ok || !volmap_ok) continue;
     ++both;
-    ASSERT_EQ(std::system((test::rs274_command("-t " + tbl_inch + " -g " + out + " " + canon_out) + " >/dev/null 2>&1")
-                              .c_str()),
-              0)
-        << "rs274 refuses volmap's output";
-    const std::vector<Eigen::Vector3d> a = end_points(canon_in), b = end_points(canon_out);
+    const Canon posted = canonical(out, tbl_inch);
+    ASSERT_TRUE(posted.ok) << "rs274 refuses volmap's output";
     size_t next = 0;
-    for (const Eigen::Vector3d& p : a) {
-      while (next < b.size() && (b[next] - p).cwiseAbs().maxCoeff() >= 0.05) ++next;
-      ASSERT_LT(next, b.size()) << "the output never passes through " << p.transpose();
+    for (const auto& [p, feed] : input.points) {
+      while (next < posted.points.size() && (posted.points[next].first - p).cwiseAbs().maxCoeff() >= 0.05) ++next;
+      ASSERT_LT(next, posted.points.size()) << "the output never passes through " << p.transpose();
       ++next;
     }
   }

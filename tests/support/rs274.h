@@ -5,22 +5,15 @@
 // under its temporary folder.
 #pragma once
 
-#include <filesystem>
 #include <string>
 
-#include <gtest/gtest.h>
-#include <unistd.h>
+#include "tests/support/cli_in_source.h"
 
 namespace volmap::test {
 
 /// "HOME=<this process's own folder> rs274 " + args, for std::system.
 inline std::string rs274_command(const std::string& args) {
-  static const std::string home = [] {
-    const std::filesystem::path d =
-        std::filesystem::path(::testing::TempDir()) / ("rs274_home_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(d);
-    return d.string();
-  }();
+  static const std::string home = fresh_dir("rs274_home").string();
   return "HOME=" + home + " rs274 " + args;
 }
 
