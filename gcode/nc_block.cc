@@ -265,4 +265,53 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
   }
 }
 
+bool lex_plain_axis_words(std::string_view text, PlainAxisWords& out) {
+  const char* t = text.data();
+  const size_t n = text.size();
+  out.given = 0;
+  out.count = 0;
+  out.spaced = false;
+  if (n == 0) return false;
+  out.lower = t[0] >= 'a';
+  size_t i = 0;
+  for (;;) {
+    // The letter: X Y Z in either case (0x20 is the case bit of ASCII letters).
+    const unsigned a = static_cast<unsigned>((t[i] & ~0x20) - 'X');
+    if (a > 2 || (t[i] != 'X' + static_cast<int>(a) && t[i] != 'x' + static_cast<int>(a))) return false;
+    if (out.given & (1u << a)) return false;  // twice: the interpreter's error
+    ++i;
+    bool negative = false;
+    if (i < n && (t[i] == '-' || t[i] == '+')) negative = t[i++] == '-';
+    // Digits and the point, as lex_block_into's fast path reads them.
+    std::uint64_t mantissa = 0;
+    size_t digits = 0;
+    int decimals = 0;
+    unsigned d;
+    while (i < n && (d = static_cast<unsigned char>(t[i]) - '0') <= 9) {
+      mantissa = mantissa * 10 + d;
+      ++i, ++digits;
+    }
+    if (i < n && t[i] == '.') {
+      ++i;
+      while (i < n && (d = static_cast<unsigned char>(t[i]) - '0') <= 9) {
+        mantissa = mantissa * 10 + d;
+        ++i, ++digits, ++decimals;
+      }
+    }
+    if (digits == 0 || digits > 15) return false;  // no number, or from_chars' case
+    const double r = static_cast<double>(static_cast<std::int64_t>(mantissa)) / kPow10[decimals];
+    out.value[a] = negative ? -r : r;
+    out.given |= 1u << a;
+    ++out.count;
+    if (i == n) break;
+    if (t[i] == ' ') {
+      out.spaced = true;
+      ++i;
+      if (i == n) return false;  // a trailing space: the writer keeps it
+    }
+  }
+  out.spaced = out.spaced || out.count <= 1;
+  return true;
+}
+
 }  // namespace volmap::nc

@@ -49,4 +49,23 @@ Block lex_block(std::string_view text, int line, const std::string& file);
 /// line once the buffers have grown: the streaming post's form).
 void lex_block_into(std::string_view text, int line, const std::string& file, Block& b);
 
+/// A line of axis words X Y Z only, in the form CAM writes them: each
+/// letter at most once, in either case, its number [sign] digits [. digits]
+/// (at most 15 digits) right after it, words separated by one space or
+/// none, nothing before, between or after them. Most lines of a
+/// three-axis CAM program look like this.
+struct PlainAxisWords {
+  double value[3] = {};  ///< by axis X Y Z, program units; as lex_block_into reads them
+  unsigned given = 0;    ///< bit a: axis a has a word
+  int count = 0;         ///< words
+  bool lower = false;    ///< the first letter is lower case (block_uses_lowercase)
+  bool spaced = false;   ///< a space between two words, or a single word (block_uses_spaces)
+};
+/// Reads `text` (without its line ending) when it is such a line: true and
+/// `out` set; false otherwise (out unspecified), also for a line
+/// lex_block_into would refuse. Where it returns true, lex_block_into reads
+/// the same words with the same values to the bit (tests/nc_test.cc); it
+/// is the post-processor's shortcut past a Block.
+bool lex_plain_axis_words(std::string_view text, PlainAxisWords& out);
+
 }  // namespace volmap::nc

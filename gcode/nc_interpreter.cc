@@ -131,6 +131,37 @@ void Interpreter::fail(const Block& b, const Word* w, const std::string& msg) co
   throw InputError(file_, b.line, w ? static_cast<int>(w->begin) + 1 : 0, msg);
 }
 
+void Interpreter::straight_move(const double (&value)[3], unsigned given, Motion& mo) {
+  s_.cycle_il_known = false;  // not a cycle: the run of cycle blocks ends
+  const Eigen::Vector3d& wo = work_offset();
+  Eigen::Vector3d target = s_.position_mm;
+  for (int a = 0; a < 3; ++a) {
+    if (!(given >> a & 1u)) continue;
+    if (s_.absolute)
+      target[a] = value[a] * s_.unit_mm + wo[a];
+    else
+      target[a] = s_.position_mm[a] + value[a] * s_.unit_mm;
+  }
+  mo.kind = s_.motion == 0 ? MotionKind::kRapid : MotionKind::kLinear;
+  mo.start_mm = s_.position_mm;
+  mo.end_mm = target;
+  mo.feed = s_.feed;
+  s_.position_mm = target;
+  for (int a = 0; a < 3; ++a)
+    if ((given >> a & 1u) && s_.absolute) s_.axis_known[static_cast<size_t>(a)] = true;
+  s_.position_known = s_.axis_known[0] && s_.axis_known[1] && s_.axis_known[2];
+}
+
+bool Interpreter::execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion) {
+  // execute()'s short path, less what cannot fail here: no F word, no
+  // other letter, the position known, G1 with a feed rate.
+  if (s_.ended || s_.motion != 10 || !s_.position_known || (s_.feed <= 0.0 && s_.feed_mode != 930) ||
+      given == 0 || given > 7)
+    return false;
+  straight_move(value, given, motion);
+  return true;
+}
+
 void Interpreter::execute(const Block& b, BlockEffect& effect) {
   // Every field as BlockEffect{} has it, without building and moving a
   // whole one (more_holes keeps its storage for the next cycle block).
@@ -236,38 +267,22 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       if (f->value < 0) fail(b, f, "negative feed");
       s_.feed = f->value;
     }
-    s_.cycle_il_known = false;  // not a cycle (as below)
-    const Eigen::Vector3d& wo = work_offset();
-    Eigen::Vector3d target = s_.position_mm;
-    std::array<bool, 3> given{};
-    for (int a = 0; a < 3; ++a) {
-      const Word* w = given_word("XYZ"[a]);
-      if (!w) continue;
-      given[static_cast<size_t>(a)] = true;
-      if (s_.absolute)
-        target[a] = w->value * s_.unit_mm + wo[a];
-      else
-        target[a] = s_.position_mm[a] + w->value * s_.unit_mm;
-    }
-    Motion& mo = effect.motion;
-    mo.start_mm = s_.position_mm;
-    mo.feed = s_.feed;
-    const int mode = s_.motion;
+    double value[3] = {};
+    unsigned given = 0;
+    for (int a = 0; a < 3; ++a)
+      if (const Word* w = given_word("XYZ"[a])) {
+        value[a] = w->value;
+        given |= 1u << a;
+      }
     bool known_after = true;
     for (int a = 0; a < 3; ++a)
-      known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] ||
-                                    (given[static_cast<size_t>(a)] && s_.absolute));
-    if (!known_after && mode != 0)
+      known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] || ((given >> a & 1u) && s_.absolute));
+    if (!known_after && s_.motion != 0)
       fail(b, nullptr, "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
                        "before the first cutting move, or give --initial-position");
-    mo.kind = mode == 0 ? MotionKind::kRapid : MotionKind::kLinear;
-    if (mode == 10 && s_.feed <= 0.0 && s_.feed_mode != 930) fail(b, nullptr, "G1 with no feed rate; add an F word");
-    mo.end_mm = target;
+    if (s_.motion == 10 && s_.feed <= 0.0 && s_.feed_mode != 930) fail(b, nullptr, "G1 with no feed rate; add an F word");
+    straight_move(value, given, effect.motion);
     effect.has_motion = true;
-    s_.position_mm = target;
-    for (int a = 0; a < 3; ++a)
-      if (given[static_cast<size_t>(a)] && s_.absolute) s_.axis_known[static_cast<size_t>(a)] = true;
-    s_.position_known = s_.axis_known[0] && s_.axis_known[1] && s_.axis_known[2];
     return;
   }
 

@@ -128,6 +128,15 @@ class Interpreter {
 
   /// Interprets one block. Throws InputError on anything refused.
   void execute(const Block& b, BlockEffect& effect);
+  /// A block of axis words only (X Y Z, `value` in program units by axis,
+  /// bit a of `given` for each word; the block nc::lex_plain_axis_words
+  /// reads) when it needs none of execute()'s checks: G1 in effect, a feed
+  /// rate set (or G93), every axis position known, the program not ended.
+  /// Then it does what execute() does with that block, sets `motion` (a
+  /// straight move; its other fields are left as they are) and returns
+  /// true; otherwise it changes nothing and returns false (execute() the
+  /// block then). The post-processor's shortcut past a Block.
+  bool execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion);
 
   const State& state() const { return s_; }
   const ProgramSetup& setup() const { return setup_; }
@@ -136,6 +145,9 @@ class Interpreter {
 
  private:
   [[noreturn]] void fail(const Block& b, const Word* w, const std::string& msg) const;
+  /// The straight move (G0 or G1) of a block of axis words: the end point,
+  /// `motion`'s kind, ends and feed, the position and the axes known.
+  void straight_move(const double (&value)[3], unsigned given, Motion& motion);
   ProgramSetup setup_;
   std::string file_;
   State s_;

@@ -193,6 +193,41 @@ class ProgramPost {
     return cmd;
   }
   const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
+  /// The line when it is plain axis words (nc::lex_plain_axis_words) of a
+  /// G1 move in G90 and G94/G95, the controller's position known, the tool
+  /// the last line's: what line() does with it, without a Block, a
+  /// BlockEffect or an edit (the usual line of a three-axis CAM program).
+  /// Returns false, having changed nothing, for any other line.
+  bool plain_line(std::string_view text);
+  /// pieces[1..] of a feed move, each as "G1 X.. Y.. Z.." (words_for(k, w)
+  /// writes piece k's words into w). A piece whose words repeat the line
+  /// before (a lost-motion step below the output resolution) is left out
+  /// when `skip_repeats`.
+  template <class WordsFor>
+  void emit_following_pieces(const std::vector<Piece>& pieces, bool g53, bool lower, bool spaces,
+                             bool skip_repeats, WordsFor&& words_for) {
+    for (size_t k = 1; k < pieces.size(); ++k) {
+      words_for(k, words_);
+      // A piece below the output resolution (a lost-motion step at a
+      // reversal) would repeat the line before it: the controller cannot
+      // command it, so it is not written.
+      if (skip_repeats && words_.view() == previous_words_.view()) continue;
+      previous_words_.assign(words_.view());
+      char* l = out_buffer_.room(3 + words_.size() + 2);
+      *l++ = lower ? 'g' : 'G';
+      *l++ = '1';
+      if (spaces) *l++ = ' ';
+      std::memcpy(l, words_.data(), words_.size());
+      end_line(l + words_.size());
+      ++report_.lines_added;
+      emitted_mm_ = reached(pieces[k].command_mm, g53);
+    }
+  }
+  static double half_unit(int dec) {
+    static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
+    return dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
+  }
+  nc::Motion plain_motion_;  ///< plain_line()'s motion (only its kind and ends change)
   void cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower, bool spaces,
                    int dec);
   void expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower, bool spaces,
@@ -655,6 +690,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   line_ending_size_ = 0;
   if (cr) line_ending_[line_ending_size_++] = '\r';
   if (newline) line_ending_[line_ending_size_++] = '\n';
+  if (plain_line(text)) return;
   nc::lex_block_into(text, number, file_, block_);
   const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
@@ -717,8 +753,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   }
   const bool spaces = spaced;
   const int dec = decimals();
-  static constexpr double kHalfUnit[] = {0.5, 0.05, 5e-3, 5e-4, 5e-5, 5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
-  const double half_unit = dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
+  const double half_unit = ProgramPost::half_unit(dec);
 
   // Indices of the words this block states.
   auto index_of = [&](char L) {
@@ -918,7 +953,6 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     }
   };
   CharBuffer& previous_words = previous_words_;
-  CharBuffer& w = words_;
   words_for(pieces[0].command_mm, 0.0, pieces[0].s_end, previous_words);
   std::string_view insert = previous_words.view();
   if (arc) {
@@ -932,23 +966,58 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   end_line(nc::apply_edit_to(b, remove.data(), removed, insert, spaces, out));
   ++report_.lines_changed;
   emitted_mm_ = reached(pieces[0].command_mm, g53);
-  for (size_t k = 1; k < pieces.size(); ++k) {
+  emit_following_pieces(pieces, g53, lower, spaces, !g93 && s.absolute, [&](size_t k, CharBuffer& w) {
     words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end, w);
-    // A piece below the output resolution (a lost-motion step at a
-    // reversal) would repeat the line before it: the controller cannot
-    // command it, so it is not written.
-    if (w.view() == previous_words.view() && !g93 && s.absolute) continue;
-    previous_words.assign(w.view());
-    char* l = out_buffer_.room(3 + w.size() + 2);
-    *l++ = lower ? 'g' : 'G';
-    *l++ = '1';
-    if (spaces) *l++ = ' ';
-    std::memcpy(l, w.data(), w.size());
-    end_line(l + w.size());
-    ++report_.lines_added;
-    emitted_mm_ = reached(pieces[k].command_mm, g53);
-  }
+  });
   emitted_known_ = true;
+}
+
+bool ProgramPost::plain_line(std::string_view text) {
+  const nc::State& st = interp_.state();
+  // The state the line needs (the rest is execute_linear_axes's): the same
+  // tool as the last line, errors, the controller's position known, G90,
+  // no inverse time.
+  if (!options_.shortcuts || !emitted_known_ || !st.absolute || st.feed_mode == 930 || !last_corrector_ ||
+      machine_.tool_length_mm + st.tool_length_mm != last_corrector_length_ || last_corrector_->zero())
+    return false;
+  nc::PlainAxisWords words;
+  if (!nc::lex_plain_axis_words(text, words)) return false;
+  if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_)) return false;
+  // From here on, line()'s path for a straight feed move, step by step.
+  ctrl_il_known_ = false;  // the run of cycle blocks has ended
+  const Corrector& c = *last_corrector_;
+  const std::vector<Piece>& pieces = segment(c, plain_motion_, emitted_mm_);
+  const int dec = decimals();
+  if (pieces.size() == 1) {
+    // needs_word of each axis (G90, not G53).
+    const double hu = half_unit(dec);
+    bool needed = false;
+    for (int a = 0; a < 3; ++a) {
+      const double old_value =
+          (words.given >> a & 1u) ? words.value[a] : program_value(a, emitted_mm_[a], false);
+      needed = needed || std::abs(program_value(a, pieces[0].command_mm[a], false) - old_value) >= hu;
+    }
+    if (!needed) {  // unchanged(): the line as written, the controller where its words say
+      emit(text);
+      const Vector3d& wo = interp_.work_offset();
+      for (int a = 0; a < 3; ++a)
+        if (words.given >> a & 1u) emitted_mm_[a] = words.value[a] * st.unit_mm + wo[a];
+      return true;
+    }
+  }
+  // The line's words are all axis words: the edited line is the first
+  // piece's words alone (apply_edit_to removes every word, separating
+  // spaces with them, and puts the insert in their place).
+  previous_words_.clear();
+  append_axis_words(pieces[0].command_mm, false, words.lower, words.spaced, previous_words_);
+  emit(previous_words_.view());
+  ++report_.lines_changed;
+  emitted_mm_ = pieces[0].command_mm;  // reached(): G90
+  emit_following_pieces(pieces, false, words.lower, words.spaced, true, [&](size_t k, CharBuffer& w) {
+    w.clear();
+    append_axis_words(pieces[k].command_mm, false, words.lower, words.spaced, w);
+  });
+  return true;
 }
 
 }  // namespace

@@ -44,6 +44,11 @@ struct PostOptions {
   /// out of it for G85 G89) keeps the tolerance too, not only the hole's
   /// bottom. Other cycles (pecking, spindle stops) are refused with it.
   bool expand_cycles = false;
+  /// Plain lines of axis words take the post's shortcut past the lexer's
+  /// Block, the interpreter's checks and the line editor (docs/post.md
+  /// "Speed"); the output is the same byte for byte. false: every line the
+  /// general way (the tests compare both).
+  bool shortcuts = true;
 };
 
 struct PostReport {

@@ -1,12 +1,18 @@
 // The post-processor's fast paths against the exact model: the error-field
 // bounds (Corrector::lipschitz_bound, curvature_bound, chord_deviation_bound)
 // measured on the exact HTM model, the warm-started fixed point, and the
-// integer fast path of format_number against fmt.
+// integer fast path of format_number against fmt, and the shortcut of
+// plain lines (nc::lex_plain_axis_words, the post's plain_line) against the
+// general lexer and post.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <memory>
 #include <random>
+#include <sstream>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -15,7 +21,9 @@
 #include "core/machine_json.h"
 #include "gcode/nc_block.h"
 #include "gcode/nc_writer.h"
+#include "gcode/nc_interpreter.h"
 #include "postproc/corrector.h"
+#include "postproc/post_program.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -269,6 +277,228 @@ TEST(NcBlockFast, NumbersEqualFromChars) {
     const nc::Block b = nc::lex_block("X" + written + " Y1", 1, "t.ngc");
     ASSERT_EQ(b.words.size(), 2u) << written;
     ASSERT_EQ(std::memcmp(&b.words[0].value, &want, sizeof want), 0) << written << " " << b.words[0].value;
+  }
+}
+
+// A random line of one to four words: mostly axis words in CAM's forms,
+// sometimes with what makes a line not plain (other letters, spaces and
+// tabs where they change the line, comments, numbers with spaces inside or
+// too many digits, a letter twice).
+std::string random_axis_line(std::mt19937_64& rng) {
+  auto pick = [&](int n) { return static_cast<int>(rng() % static_cast<unsigned>(n)); };
+  std::string line;
+  const int words = 1 + pick(4);
+  for (int k = 0; k < words; ++k) {
+    if (k > 0) {
+      const int sep = pick(12);
+      line += sep < 6 ? " " : sep < 10 ? "" : sep == 10 ? "  " : "\t";
+    }
+    const char* letters = pick(10) < 8 ? "XYZ" : "XYZFGN";
+    char L = letters[pick(static_cast<int>(std::strlen(letters)))];
+    if (pick(4) == 0) L = static_cast<char>(L - 'A' + 'a');
+    line += L;
+    const int sign = pick(5);
+    if (sign == 0) line += '-';
+    if (sign == 1) line += '+';
+    const int n_int = pick(5), n_frac = pick(9) < 7 ? pick(6) : 10 + pick(8);
+    for (int i = 0; i < n_int; ++i) line += static_cast<char>('0' + pick(10));
+    if (n_frac > 0 || pick(3) == 0) line += '.';
+    for (int i = 0; i < n_frac; ++i) line += static_cast<char>('0' + pick(10));
+    if (pick(40) == 0) line += " 5";
+  }
+  const int tail = pick(30);
+  if (tail == 0) line += " ";
+  if (tail == 1) line += "(c)";
+  if (tail == 2) line += ";c";
+  if (tail == 3) line = " " + line;
+  return line;
+}
+
+// Where lex_plain_axis_words takes a line, lex_block_into reads the same
+// words: letters X Y Z, the same values to the bit, the case and spacing
+// the writer keeps.
+TEST(NcBlockFast, PlainAxisWordsAreTheLexersWords) {
+  std::mt19937_64 rng(11);
+  int plain = 0, other = 0;
+  for (int trial = 0; trial < 200000; ++trial) {
+    const std::string line = random_axis_line(rng);
+    nc::PlainAxisWords p;
+    if (!nc::lex_plain_axis_words(line, p)) {
+      ++other;
+      continue;
+    }
+    ++plain;
+    nc::Block b;
+    ASSERT_NO_THROW(nc::lex_block_into(line, 1, "t.ngc", b)) << line;
+    ASSERT_EQ(static_cast<int>(b.words.size()), p.count) << line;
+    unsigned seen = 0;
+    for (const nc::Word& w : b.words) {
+      ASSERT_TRUE(w.letter >= 'X' && w.letter <= 'Z') << line;
+      const int a = w.letter - 'X';
+      ASSERT_FALSE(seen >> a & 1u) << line;
+      seen |= 1u << a;
+      ASSERT_EQ(std::memcmp(&w.value, &p.value[a], sizeof(double)), 0) << line << " " << w.value;
+    }
+    ASSERT_EQ(seen, p.given) << line;
+    ASSERT_EQ(p.lower, nc::block_uses_lowercase(b)) << line;
+    ASSERT_EQ(p.spaced, nc::block_uses_spaces(b)) << line;
+    // The writer's edit that replaces every word leaves the insert alone.
+    std::vector<int> all(b.words.size());
+    for (size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+    std::string buf(line.size() + 8 + 1, '#');
+    char* end = nc::apply_edit_to(b, all.data(), all.size(), "INSERT", p.spaced, buf.data());
+    ASSERT_EQ(std::string(buf.data(), end), "INSERT") << line;
+  }
+  // Both kinds were met often.
+  EXPECT_GT(plain, 20000);
+  EXPECT_GT(other, 20000);
+  EXPECT_FALSE(nc::lex_plain_axis_words("", *std::make_unique<nc::PlainAxisWords>()));
+}
+
+// A random program of the forms a three-axis program mixes: plain lines in
+// every case and spacing, lines that are not plain, G0 and G1 with F, G91
+// and G20 stretches, tool length offsets, comments, block delete, CRLF,
+// short zig-zag steps (lost-motion reversals, split pieces) and long ones.
+std::string random_program(std::mt19937_64& rng) {
+  auto pick = [&](int n) { return static_cast<int>(rng() % static_cast<unsigned>(n)); };
+  auto uni = [&](double lo, double hi) { return lo + (hi - lo) * static_cast<double>(rng() % 1000001) / 1e6; };
+  std::string p = "%\nG21 G90 G17 G94\nG0 X10 Y10 Z20\nG1 F800\n";
+  double x = 10, y = 10, z = 20;  // nominal, mm, G90 program coordinates
+  bool inch = false, incremental = false, rapid = false;
+  for (int k = 0; k < 1500; ++k) {
+    const int what = pick(100);
+    const char* eol = pick(50) == 0 ? "\r\n" : "\n";
+    if (what < 3) {
+      incremental = !incremental;
+      p += incremental ? "G91" : "G90";
+    } else if (what < 5) {
+      inch = !inch;
+      p += inch ? "G20" : "G21";
+    } else if (what < 7) {
+      p += pick(2) ? "G43 H1" : (pick(2) ? "G43 H2" : "G49");
+    } else if (what < 9) {
+      p += "(a comment)";
+    } else if (what < 11) {
+      p += fmt::format("G0 Z{:.3f}", (incremental ? 0.0 : z) / (inch ? 25.4 : 1.0));
+      rapid = true;
+    } else if (what < 13) {
+      p += fmt::format("F{}", 200 + pick(2000));
+    } else {
+      // A move: short steps zig-zag (reversals), some long ones.
+      const double step = pick(4) == 0 ? uni(5, 40) : uni(0.001, 0.8);
+      double nx = std::clamp(x + (pick(2) ? step : -step), 0.0, 200.0);
+      double ny = std::clamp(y + (pick(3) == 0 ? uni(-2, 2) : 0.0), 0.0, 200.0);
+      double nz = std::clamp(z + (pick(2) ? uni(-1, 1) : 0.0), -20.0, 50.0);
+      const int axes = 1 + pick(7);  // which of X Y Z the line names
+      if (!(axes & 1)) nx = x;
+      if (!(axes & 2)) ny = y;
+      if (!(axes & 4)) nz = z;
+      const double unit = inch ? 25.4 : 1.0;
+      const int dec = inch ? 5 : 4;
+      const bool lower = pick(10) == 0;
+      const std::string sep = pick(8) == 0 ? "" : " ";
+      std::string words;
+      const double v[3] = {nx, ny, nz}, was[3] = {x, y, z};
+      for (int a = 0; a < 3; ++a) {
+        if (!(axes >> a & 1)) continue;
+        if (!words.empty()) words += sep;
+        words += lower ? "xyz"[a] : "XYZ"[a];
+        words += fmt::format("{:.{}f}", (incremental ? v[a] - was[a] : v[a]) / unit, dec);
+      }
+      const int form = pick(20);
+      if (form == 0) words = "G1 " + words, rapid = false;
+      if (form == 1) words = "N" + std::to_string(k) + " " + words;
+      if (form == 2) words += " (c)";
+      if (form == 3) words = "/" + words;
+      if (form == 4) words = "G0 " + words, rapid = true;  // plain lines in G0 follow
+      if (form > 4 && rapid && pick(3) == 0) words = "G1 " + words, rapid = false;
+      p += words;
+      x = nx, y = ny, z = nz;  // (a block-delete line runs too: volmap executes it)
+    }
+    p += eol;
+  }
+  p += "G90 G21\nG0 Z50\nM2\n%\n";
+  return p;
+}
+
+std::pair<std::string, post::PostReport> post_with(const std::string& program, const Machine& m,
+                                                   const ErrorSet& e, double tol_um, bool shortcuts) {
+  nc::ProgramSetup setup;
+  setup.work_offset_mm[0] = m.name == "hsu-3axis" ? Vector3d(150, 100, 200) : Vector3d(300, 200, 100);
+  setup.tool_length_mm[1] = 12.5;
+  setup.tool_length_mm[2] = -7.25;
+  post::PostOptions o;
+  o.tolerance_mm = tol_um * 1e-3;
+  o.shortcuts = shortcuts;
+  std::istringstream in(program);
+  std::ostringstream out;
+  const post::PostReport r = post::post_program(in, "random.ngc", out, m, e, setup, o);
+  return {out.str(), r};
+}
+
+// The errors times `factor` (values, slopes and location errors).
+ErrorSet scaled(ErrorSet e, double factor) {
+  for (auto& axis : e.axis) {
+    if (!axis) continue;
+    for (AxisErrorTable* t : {&axis->plus, &axis->minus})
+      for (auto* rows : {&t->value, &t->slope})
+        for (auto& row : *rows)
+          for (double& v : row) v *= factor;
+  }
+  for (auto& [name, v] : e.location) v *= factor;
+  return e;
+}
+
+// The shortcut of plain lines writes what the general path writes, byte for
+// byte, and counts the same, on programs that go in and out of it: on two
+// machines, and with errors a hundred times smaller (corrections of about
+// the output's resolution: lines kept as written and lines changed mixed).
+TEST(PostShortcut, PlainLinesGiveTheGeneralPathsOutput) {
+  std::mt19937_64 rng(23);
+  const Machine machines[] = {hsu(), load_machine_json(test::source_path("samples/machines/gantry-3axis.json")),
+                              hsu()};
+  const ErrorSet errors[] = {hsu_errors(), load_errors_csv(test::source_path("samples/errors/gantry-3axis.csv")),
+                             scaled(hsu_errors(), 0.01)};
+  for (int trial = 0; trial < 9; ++trial) {
+    const std::string program = random_program(rng);
+    int plain = 0;
+    std::istringstream lines(program);
+    for (std::string l; std::getline(lines, l);) {
+      nc::PlainAxisWords w;
+      plain += nc::lex_plain_axis_words(l, w) ? 1 : 0;
+    }
+    EXPECT_GT(plain, 800);
+    const int k = trial % 3;
+    const double tol_um = trial < 6 ? 1.0 : 0.2;
+    const auto general = post_with(program, machines[k], errors[k], tol_um, false);
+    const auto shortcut = post_with(program, machines[k], errors[k], tol_um, true);
+    ASSERT_EQ(shortcut.first, general.first) << "trial " << trial;
+    EXPECT_EQ(shortcut.second.lines, general.second.lines);
+    EXPECT_EQ(shortcut.second.lines_changed, general.second.lines_changed);
+    EXPECT_EQ(shortcut.second.lines_added, general.second.lines_added);
+    EXPECT_EQ(shortcut.second.points_corrected, general.second.points_corrected);
+    EXPECT_EQ(shortcut.second.max_correction_mm, general.second.max_correction_mm);
+    // The programs are corrected, pieces added (the small errors: some
+    // lines kept, some changed).
+    EXPECT_GT(general.second.lines_changed, k == 2 ? 100u : 500u) << trial;
+    EXPECT_LT(general.second.lines_changed, general.second.lines - (k == 2 ? 300u : 0u)) << trial;
+    if (k < 2) {
+      EXPECT_GT(general.second.lines_added, 10u) << trial;
+    }
+  }
+  // The sample and LinuxCNC's programs.
+  std::vector<std::string> paths = {test::source_path("samples/programs/pocket.ngc")};
+  for (const char* name : {"tort.ngc", "arcspiral.ngc", "3dtest.ngc", "cds.ngc"})
+    if (std::ifstream(std::string("/usr/share/linuxcnc/ncfiles/") + name))
+      paths.push_back(std::string("/usr/share/linuxcnc/ncfiles/") + name);
+  for (const std::string& path : paths) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    const auto general = post_with(ss.str(), machines[0], errors[0], 1.0, false);
+    const auto shortcut = post_with(ss.str(), machines[0], errors[0], 1.0, true);
+    EXPECT_EQ(shortcut.first, general.first) << path;
+    EXPECT_EQ(shortcut.second.points_corrected, general.second.points_corrected) << path;
   }
 }
 
