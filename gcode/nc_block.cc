@@ -266,51 +266,60 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
 }
 
 bool lex_plain_axis_words(std::string_view text, PlainAxisWords& out) {
-  const char* t = text.data();
-  const size_t n = text.size();
-  out.given = 0;
-  out.count = 0;
-  out.spaced = false;
-  if (n == 0) return false;
-  out.lower = t[0] >= 'a';
-  size_t i = 0;
+  // Locals only until the end: a store through `out` could, for all the
+  // compiler knows, change the characters (char aliases everything).
+  const char* p = text.data();
+  const char* const end = p + text.size();
+  if (p == end) return false;
+  const bool lower = *p >= 'a';
+  double value[3] = {};
+  unsigned given = 0;
+  int count = 0;
+  bool spaced = false;
   for (;;) {
     // The letter: X Y Z in either case (0x20 is the case bit of ASCII letters).
-    const unsigned a = static_cast<unsigned>((t[i] & ~0x20) - 'X');
-    if (a > 2 || (t[i] != 'X' + static_cast<int>(a) && t[i] != 'x' + static_cast<int>(a))) return false;
-    if (out.given & (1u << a)) return false;  // twice: the interpreter's error
-    ++i;
+    const char c = *p;
+    const unsigned a = static_cast<unsigned>((c | 0x20) - 'x');
+    if (a > 2 || (c & ~0x20) < 'X' || (c & ~0x20) > 'Z') return false;
+    if (given & (1u << a)) return false;  // twice: the interpreter's error
+    ++p;
     bool negative = false;
-    if (i < n && (t[i] == '-' || t[i] == '+')) negative = t[i++] == '-';
+    if (p != end && (*p == '-' || *p == '+')) negative = *p++ == '-';
     // Digits and the point, as lex_block_into's fast path reads them.
     std::uint64_t mantissa = 0;
-    size_t digits = 0;
-    int decimals = 0;
+    const char* const first = p;
     unsigned d;
-    while (i < n && (d = static_cast<unsigned char>(t[i]) - '0') <= 9) {
+    while (p != end && (d = static_cast<unsigned char>(*p) - '0') <= 9) {
       mantissa = mantissa * 10 + d;
-      ++i, ++digits;
+      ++p;
     }
-    if (i < n && t[i] == '.') {
-      ++i;
-      while (i < n && (d = static_cast<unsigned char>(t[i]) - '0') <= 9) {
+    long digits = p - first;
+    int decimals = 0;
+    if (p != end && *p == '.') {
+      const char* const frac = ++p;
+      while (p != end && (d = static_cast<unsigned char>(*p) - '0') <= 9) {
         mantissa = mantissa * 10 + d;
-        ++i, ++digits, ++decimals;
+        ++p;
       }
+      decimals = static_cast<int>(p - frac);
+      digits += decimals;
     }
     if (digits == 0 || digits > 15) return false;  // no number, or from_chars' case
     const double r = static_cast<double>(static_cast<std::int64_t>(mantissa)) / kPow10[decimals];
-    out.value[a] = negative ? -r : r;
-    out.given |= 1u << a;
-    ++out.count;
-    if (i == n) break;
-    if (t[i] == ' ') {
-      out.spaced = true;
-      ++i;
-      if (i == n) return false;  // a trailing space: the writer keeps it
+    value[a] = negative ? -r : r;
+    given |= 1u << a;
+    ++count;
+    if (p == end) break;
+    if (*p == ' ') {
+      spaced = true;
+      if (++p == end) return false;  // a trailing space: the writer keeps it
     }
   }
-  out.spaced = out.spaced || out.count <= 1;
+  for (int a = 0; a < 3; ++a) out.value[a] = value[a];
+  out.given = given;
+  out.count = count;
+  out.lower = lower;
+  out.spaced = spaced || count <= 1;
   return true;
 }
 
