@@ -291,8 +291,8 @@ class ProgramPost {
   // Program value of axis a for commanded machine position v.
   double program_value(int a, double v_mm, bool g53) const {
     const nc::State& s = interp_.state();
-    if (s.absolute) return (v_mm - (g53 ? 0.0 : interp_.work_offset()[a])) / s.unit_mm;
-    return (v_mm - emitted_mm_[a]) / s.unit_mm;
+    const double d = s.absolute ? v_mm - (g53 ? 0.0 : interp_.work_offset()[a]) : v_mm - emitted_mm_[a];
+    return s.unit_mm == 1.0 ? d : d / s.unit_mm;  // x / 1 is x: no division in mm (the same bits)
   }
   void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, CharBuffer& s) {
     const int dec = decimals();
