@@ -93,6 +93,13 @@ Corrector::Corrector(const Machine& machine, const ErrorSet& errors,
   }
   model_ = std::make_unique<ErrorModel>(std::move(with_tool), errors, ModelOptions{Formulation::kIndependent, outside});
   compute_bounds(machine, errors);
+  finish_setup();
+}
+
+void Corrector::finish_setup() {
+  const double L = lipschitz_;
+  step_factor_ = L < 0.5 ? L / (1.0 - L) : std::numeric_limits<double>::infinity();
+  identity_u_tip_ = M_u_tip_ == Eigen::Matrix3d::Identity();
 }
 
 Corrector::Corrector(const Machine& machine, const maps::VolumetricTable& table, OutsidePolicy outside)
@@ -133,6 +140,7 @@ Corrector::Corrector(const Machine& machine, const maps::VolumetricTable& table,
     box_hi_[a] = g.end;
   }
   lipschitz_ = curvature_ = std::numeric_limits<double>::infinity();
+  finish_setup();
 }
 
 Eigen::Vector3d Corrector::table_error(const Eigen::Vector3d& u_mm, const ApproachDirections& dir) const {
@@ -247,6 +255,9 @@ Eigen::Vector3d Corrector::error_at(const Eigen::Vector3d& p, const ApproachDire
   if (zero_) return Eigen::Vector3d::Zero();
   if (table_) return M_u_tip_ * table_error(p + axis_shift_mm_, dir);
   const double u[3] = {p.x() + axis_shift_mm_.x(), p.y() + axis_shift_mm_.y(), p.z() + axis_shift_mm_.z()};
+  // (The identity's product is the vector itself, but for the sign of an
+  // exact zero, which no written number shows.)
+  if (identity_u_tip_) return model_->tip_error_linear(u, dir);
   return M_u_tip_ * model_->tip_error_linear(u, dir);
 }
 
@@ -303,8 +314,7 @@ Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal, const A
 // accuracy_mm.
 Eigen::Vector3d Corrector::iterate(const Eigen::Vector3d& p, const ApproachDirections& dir,
                                    Eigen::Vector3d x, double accuracy_mm) const {
-  const double L = lipschitz_;
-  const double factor = L < 0.5 ? L / (1.0 - L) : std::numeric_limits<double>::infinity();
+  const double factor = step_factor_;
   for (int k = 0; k < 21; ++k) {
     const Eigen::Vector3d next = p - error_at(x, dir);
     const double step = (next - x).norm();

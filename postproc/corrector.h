@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <memory>
 
 #include <Eigen/Core>
@@ -104,6 +105,12 @@ class Corrector {
   bool zero_ = false;
   std::array<bool, 3> bidirectional_{};
   double lipschitz_ = 0.0, curvature_ = 0.0;
+  /// iterate()'s certificate, L / (1 - L) (infinite for L >= 0.5), computed once.
+  double step_factor_ = std::numeric_limits<double>::infinity();
+  /// M_u_tip_ is the identity (a machine whose axes move the tip along
+  /// +x, +y, +z): error_at skips the product.
+  bool identity_u_tip_ = false;
+  void finish_setup();
   Eigen::Vector3d box_lo_ = Eigen::Vector3d::Zero(), box_hi_ = Eigen::Vector3d::Zero();  ///< machine frame
   void compute_bounds(const Machine& machine, const ErrorSet& errors);
   Eigen::Vector3d iterate(const Eigen::Vector3d& p_nominal, const ApproachDirections& dir,
