@@ -586,6 +586,7 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       // LinuxCNC (convert_cycle_g73/g83): "Negative or zero q value used".
       if (const Word* q = word('Q'); q && (mode == 830 || mode == 730) && q->value <= 0)
         fail(b, q, "the peck depth Q must be positive (LinuxCNC refuses a negative or zero Q)");
+      if (const Word* q = word('Q'); q && (mode == 830 || mode == 730)) s_.cycle_q = q->value;
       if ((mode == 820 || mode == 860 || mode == 890) && !word('P') && starts)
         fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
       if (mode == 860 && !s_.spindle_turning)

@@ -91,6 +91,9 @@ struct State {
   /// R_PLANE, until G98; rs274 shows it), not G98.
   bool g98 = false;
   double cycle_r = 0.0, cycle_z = 0.0;  ///< modal R and Z of canned cycles (program units)
+  /// Modal peck depth Q of G73/G83 (program units, as written; LinuxCNC's
+  /// cycle_q: a G73/G83 block without Q keeps the last one).
+  double cycle_q = 0.0;
   /// LinuxCNC's initial level of a run of canned-cycle blocks: the Z (mm,
   /// machine) where the first of them started; G98 returns to it (or to R
   /// when R is higher) and G91's R counts from it. A motion that is not a

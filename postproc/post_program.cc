@@ -584,21 +584,26 @@ void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, con
   emitted_known_ = true;
 }
 
+// Pecks of one hole that --expand-cycles writes out at most.
+constexpr int kMaxPecks = 10000;
+
 // --expand-cycles: a cycle block (every hole of it) becomes its moves, as
 // LinuxCNC makes them (interp_cycles.cc): up to R if below it, over the hole
 // at the clearance level (the first hole: at the level the tool is at, if
-// higher than R), down to R, the feed to the bottom, a dwell for G82 G89,
-// out at feed to R for G85 G89, then to the clearance level. The block's
+// higher than R), down to R, the pecks of G73 G83, the feed to the bottom, a
+// dwell for G82 G89, out at feed to R for G85 G89, then to the clearance
+// level. The block's
 // other words (N, F, S, M...) stay on its line, with the cycle's G code,
 // X Y Z R L P Q and polar words removed; the moves follow it.
 void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
                                bool spaces, int dec) {
   const nc::State& s = interp_.state();
   const int code = s.motion;
-  if (code != 810 && code != 820 && code != 850 && code != 890)
+  if (code != 730 && code != 810 && code != 820 && code != 830 && code != 850 && code != 890)
     throw InputError(file_, current_line_,
-                     fmt::format("--expand-cycles writes out G81 G82 G85 G89 only; this is G{}; post it without "
-                                 "--expand-cycles (its hole bottom and R plane are corrected)",
+                     fmt::format("--expand-cycles writes out G73 G81 G82 G83 G85 G89 only; this is G{} (it stops "
+                                 "the spindle); post it without --expand-cycles (its hole bottom and R plane are "
+                                 "corrected)",
                                  code / 10));
   if (s.feed_mode == 930)
     throw InputError(file_, current_line_, "--expand-cycles under inverse time feed (G93): use G94 for the cycles");
@@ -628,6 +633,31 @@ void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, co
     if (at.z() < h.r_mm) rapid_to(Vector3d(at.x(), at.y(), h.r_mm));
     rapid_to(Vector3d(x, y, k == 0 ? at.z() : h.clear_mm));
     if (at.z() > h.r_mm) rapid_to(Vector3d(x, y, h.r_mm));
+    if (code == 730 || code == 830) {
+      // The pecks, as LinuxCNC makes them (convert_cycle_g73/g83): levels
+      // R - Q, R - 2Q, ... above the bottom, by repeated subtraction in
+      // program units and coordinates (the same count of pecks for a bottom
+      // a whole number of Q below R); after each, G83 rapids out to R and
+      // back down to the level reached, G73 rapids up; either stops short
+      // of the level reached by 0.010 in (0.254 mm in a mm program).
+      const double unit = s.unit_mm, wo_z = interp_.work_offset()[2];
+      const double r_prog = s.absolute ? s.cycle_r : (h.r_mm - wo_z) / unit;
+      const double bottom_prog = s.absolute ? s.cycle_z : (h.end_mm.z() - wo_z) / unit;
+      const double back_off = unit == 1.0 ? 0.010 * 25.4 : 0.010;
+      int pecks = 0;
+      for (double depth = r_prog - s.cycle_q; depth > bottom_prog; depth -= s.cycle_q) {
+        if (++pecks > kMaxPecks)
+          throw InputError(file_, current_line_,
+                           fmt::format("more than {} pecks in one hole (Q {:g}); --expand-cycles would write "
+                                       "them all: raise Q or post without --expand-cycles",
+                                       kMaxPecks, s.cycle_q));
+        const Vector3d level(x, y, depth * unit + wo_z);
+        expanded_feed(c, at, level, lower, spaces);
+        at = level;
+        if (code == 830) rapid_to(Vector3d(x, y, h.r_mm));
+        rapid_to(Vector3d(x, y, (depth + back_off) * unit + wo_z));
+      }
+    }
     const Vector3d bottom(x, y, h.end_mm.z());
     expanded_feed(c, at, bottom, lower, spaces);
     at = bottom;

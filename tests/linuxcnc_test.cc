@@ -347,6 +347,62 @@ TEST(LinuxCnc, ArcAndCycleLimitsAreLinuxCncs) {
   }
 }
 
+// --expand-cycles writes G73 and G83 out as LinuxCNC makes them: rs274
+// runs the posted moves through the pecks of the input, one for one (G83
+// out to R and back down to 0.254 mm or 0.010 in above the level reached,
+// G73 up by that much; levels by repeated subtraction of Q in program
+// units, so a bottom a whole number of pecks below R, in mm and in inch,
+// gets no extra peck), G98 and G99, a restated cycle keeping its Q, L
+// repeats under G91. A loose tolerance keeps every feed one piece; points
+// less than 0.01 mm from the one before (a lost-motion take-up step, the
+// traverse to where the tool already is) count once on both sides.
+TEST(LinuxCnc, ExpandedPeckCyclesAreRs274sMoves) {
+  require_rs274();
+  const std::string program =
+      "G21 G90 G17 G94\nF100\nG0 X10 Y10 Z20\n"
+      "G98 G83 X10 Y10 Z-3 R2 Q1\n"          // a bottom three pecks below R
+      "X20 Z-2.5\n"                            // restated: Q 1 kept
+      "G99 G73 X30 Y10 Z-3.1 R2 Q1.2\n"
+      "G80\nG0 Z20\n"
+      "G91 G98 G83 X5 Y0 Z-4 R-18 Q1.5 L3\n"  // R at 2, bottom at -2, three holes in a row
+      "G90 G80\nG20\nG0 Z1\n"
+      "G98 G83 X1 Y1 Z-0.1 R0.1 Q0.04\n"      // inch: 0.1 - 5 x 0.04 by repeated subtraction
+      "G73 X1.2 Y1 Z-0.1 R0.1 Q0.05\n"
+      "G80\nG21\nG0 Z20\nM2\n";
+  const fs::path dir = test::fresh_dir("pecks");
+  const std::string in = (dir / "pecks.ngc").string(), out = (dir / "pecks-post.ngc").string();
+  std::ofstream(in, std::ios::binary) << program;
+  const std::string cmd =
+      hsu_post_command("--work-offset 150,100,200 --expand-cycles --tolerance-um 50 " + in + " -o " + out);
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const std::string written = test::file_bytes(out);
+  EXPECT_EQ(written.find("G83"), std::string::npos);
+  EXPECT_EQ(written.find("G73"), std::string::npos);
+  const Canon input = canonical(in, ""), posted = canonical(out, "");
+  ASSERT_TRUE(input.ok) << input.errors;
+  ASSERT_TRUE(posted.ok) << posted.errors;
+  auto distinct = [](const Canon& c) {
+    std::vector<std::pair<Eigen::Vector3d, bool>> v;
+    for (const auto& p : c.points)
+      if (v.empty() || (p.first - v.back().first).norm() >= 0.01) v.push_back(p);
+    return v;
+  };
+  const auto want = distinct(input), got = distinct(posted);
+  // The feeds rs274 makes of the input (pecks and the last feed to the
+  // bottom): levels 1 0 -1 -2 and -3; 1 0 -1 -2 and -2.5; 0.8 -0.4 -1.6
+  // -2.8 and -3.1; three holes of 0.5 -1 and -2; in inch 0.06 0.02 -0.02
+  // -0.06 and -0.1; 0.05 0 -0.05 and -0.1.
+  int feeds = 0;
+  for (const auto& p : want) feeds += p.second ? 1 : 0;
+  EXPECT_EQ(feeds, 5 + 5 + 5 + 3 * 3 + 5 + 4);
+  ASSERT_EQ(got.size(), want.size()) << written;
+  for (size_t k = 0; k < want.size(); ++k) {
+    EXPECT_EQ(got[k].second, want[k].second) << "move " << k << (want[k].second ? " is a feed" : " is a traverse");
+    EXPECT_LT((got[k].first - want[k].first).cwiseAbs().maxCoeff(), 0.05)
+        << "move " << k << ": " << got[k].first.transpose() << " vs " << want[k].first.transpose();
+  }
+}
+
 // Random programs of the words volmap reads, as a fuzzer writes them (any
 // order, words no code uses, arcs with stray centres, cycles without their
 // words, zero and negative P Q L): volmap post refuses every program rs274

@@ -517,12 +517,40 @@ TEST(PostCycles, HolesApproachedWithThePlayTakenUpAndExpandedCyclesKeepTheTolera
     EXPECT_GT(r.before.max_um, 20.0);
     EXPECT_LE(r.after.max_um, 1.0 + 0.09) << "worst at line " << r.after.worst_line;
   }
-  // Pecking and spindle-stop cycles are not written out.
+  // Pecking cycles are written out too (their moves against rs274's:
+  // LinuxCnc.ExpandedPeckCyclesAreRs274sMoves), within the tolerance.
+  {
+    const std::string pecks = "G21 G90\nG0 X10 Y10 Z10\nG98 G83 X20 Y20 Z-5 R2 Q1 F100\nG99 G73 X30 Z-4 R2 Q0.7\nG80\n";
+    std::istringstream in(pecks);
+    std::ostringstream out;
+    post::PostOptions o;
+    o.expand_cycles = true;
+    post::post_program(in, "peck.ngc", out, hsu(), hsu_errors(), s, o);
+    std::istringstream a(pecks), b(out.str());
+    const post::VerifyResult r = post::verify_programs(a, "peck.ngc", b, "out.ngc", hsu(), hsu_errors(), s, {});
+    EXPECT_GT(r.before.max_um, 20.0);
+    EXPECT_LE(r.after.max_um, 1.0 + 0.09) << "worst at line " << r.after.worst_line;
+  }
+  // A hole of more pecks than --expand-cycles writes: refused at its line.
+  {
+    std::istringstream in("G21 G90\nG0 X10 Y10 Z10\nG83 X20 Y20 Z-5 R2 Q0.0005 F100\n");
+    std::ostringstream out;
+    post::PostOptions o;
+    o.expand_cycles = true;
+    try {
+      post::post_program(in, "peck.ngc", out, hsu(), hsu_errors(), s, o);
+      ADD_FAILURE() << "14 000 pecks were written";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("peck.ngc:3"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("10000 pecks"), std::string::npos) << e.what();
+    }
+  }
+  // Spindle-stop cycles are not written out.
   post::PostOptions o;
   o.expand_cycles = true;
-  std::istringstream in("G21 G90\nG0 X10 Y10 Z10\nG83 X20 Y20 Z-5 R2 Q1 F100\n");
+  std::istringstream in("G21 G90\nM3 S1000\nG0 X10 Y10 Z10\nG86 X20 Y20 Z-5 R2 P0.5 F100\n");
   std::ostringstream out;
-  EXPECT_THROW(post::post_program(in, "peck.ngc", out, hsu(), hsu_errors(), offset_setup(100, 100, 100), o),
+  EXPECT_THROW(post::post_program(in, "bore.ngc", out, hsu(), hsu_errors(), offset_setup(100, 100, 100), o),
                InputError);
 }
 

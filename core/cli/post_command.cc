@@ -90,7 +90,7 @@ Runner register_post(CLI::App& app) {
   o->five.add_to(*sub, /*post=*/true);
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_flag("--expand-cycles", o->expand_cycles,
-                "Write canned cycles G81 G82 G85 G89 out as their moves, so the feed into the hole keeps the tolerance too (three axes)");
+                "Write canned cycles G73 G81 G82 G83 G85 G89 out as their moves (LinuxCNC's), so the feed into the hole keeps the tolerance too (three axes)");
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
   sub->footer("Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
