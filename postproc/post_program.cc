@@ -193,6 +193,10 @@ class ProgramPost {
     return cmd;
   }
   const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m, const Vector3d& start_cmd);
+  /// PostOptions::keep_arcs: writes the arc block `b` (motion m) as the
+  /// corrected arc when that arc keeps the tolerance, and returns true;
+  /// false (nothing written, nothing changed) when it does not or cannot.
+  bool keep_arc(const nc::Block& b, const nc::Motion& m, const Corrector& c, bool lower, bool spaces);
   /// The line when it is plain axis words (nc::lex_plain_axis_words) of a
   /// G1 move in G90 and G94/G95, the controller's position known, the tool
   /// the last line's: what line() does with it, without a Block, a
@@ -920,6 +924,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     throw InputError(file_, number, "a feed move and a stop code (M0/M1/M2/M30/M60) in one block; "
                                     "put the stop code on its own line");
   const Vector3d start_cmd = emitted_mm_;
+  if (m.kind == nc::MotionKind::kArc && options_.keep_arcs && keep_arc(b, m, c, lower, spaces)) return;
   const std::vector<Piece>& pieces = segment(c, m, start_cmd);
   const bool arc = m.kind == nc::MotionKind::kArc;
   // A straight move whose end needs no change stays as written.
@@ -1000,6 +1005,147 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end, w);
   });
   emitted_known_ = true;
+}
+
+// Arcs kept as arcs (PostOptions::keep_arcs). The controller runs an arc
+// from where it stands (the corrected start c0) to the written end about the
+// written centre, its radius going linearly from start to end (nc::point_on,
+// as verify simulates it). The end is the corrected end point; the centre is
+// the nominal one moved by the mean of the corrections at the arc's ends
+// (for an error field that is affine over the arc, the corrected points of
+// the nominal arc lie on a slightly distorted circle about it). Kept only
+// when the actual tip along that arc stays within half the tolerance of the
+// nominal path at samples 0.05 rad apart at most (the deviation's second
+// derivative along the arc is of the order of the correction, some 1e-2 mm
+// per rad^2: between samples it grows by less than 1e-5 mm; the other half
+// of the tolerance is left to the rounding of the written numbers), and
+// when no axis reverses on the way (a reversal's lost-motion step cannot be
+// taken up inside an arc): the plane's axes move one way each over the
+// whole sweep, and the directions the arc starts with are those the axes
+// last moved in, as far as the errors tell them apart. Full circles, P
+// turns, polar words and sweeps near a full turn are linearised.
+bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Corrector& c, bool lower,
+                           bool spaces) {
+  if (m.extra_turns != 0 || b.has('@') || b.has('^') || !emitted_known_) return false;
+  // An arc whose plane axes each move one way: no multiple of pi/2 inside
+  // its sweep farther than `margin` (rad) from its ends, and not near a full
+  // turn.
+  auto monotonic = [](const nc::ArcGeometry& g, double margin) {
+    if (!(std::abs(g.sweep) < 2 * M_PI - 0.1)) return false;
+    const double lo = std::min(g.start_angle, g.start_angle + g.sweep) + margin,
+                 hi = std::max(g.start_angle, g.start_angle + g.sweep) - margin;
+    return std::floor(lo / (M_PI / 2)) * (M_PI / 2) + M_PI / 2 >= hi;
+  };
+  const nc::ArcGeometry g = nc::arc_geometry(m);
+  if (!monotonic(g, 1e-12)) return false;
+  // The arc's approach directions: the plane's axes from the sweep (the
+  // tangent at its middle), the normal axis from the helix, else kept.
+  const Vector3d mid_tangent = nc::point_on(m, 0.5 + 1e-3) - nc::point_on(m, 0.5 - 1e-3);
+  ApproachDirections d = last_dir_;
+  for (int a : {g.a0, g.a1})
+    if (mid_tangent[a] != 0) d[static_cast<size_t>(a)] = mid_tangent[a] > 0 ? 1 : -1;
+  if (m.end_mm[g.normal] != m.start_mm[g.normal])
+    d[static_cast<size_t>(g.normal)] = m.end_mm[g.normal] > m.start_mm[g.normal] ? 1 : -1;
+  // An axis that reverses at the arc's start (or starts moving) takes up
+  // its play first: the start point commanded with the arc's directions, in
+  // a G1 of its own (segment()'s take-up step), then the arc from there.
+  const nc::State& s = interp_.state();
+  const bool step = !c.same_error(last_dir_, d);
+  if (step && s.feed_mode == 930) return false;  // the step's own F: linearised instead
+  // What command() changes: put back if the arc is not kept.
+  const LastCorrected last_was = last_, before_last_was = before_last_;
+  const PostReport report_was = report_;
+  const Vector3d c0 = step ? command(c, m.start_mm, d) : emitted_mm_;
+  const Vector3d c1 = command(c, m.end_mm, d);
+  nc::Motion cmd = m;
+  cmd.start_mm = c0;
+  cmd.end_mm = c1;
+  const Vector3d shift = 0.5 * ((c0 - m.start_mm) + (c1 - m.end_mm));
+  cmd.center_mm[g.a0] = m.center_mm[g.a0] + shift[g.a0];
+  cmd.center_mm[g.a1] = m.center_mm[g.a1] + shift[g.a1];
+  const nc::ArcGeometry gc = nc::arc_geometry(cmd);
+  // The corrected arc may begin or end a hair past a quadrant point the
+  // nominal one begins or ends at: an axis then backs up by r (1 - cos a)
+  // before it moves on, under 1e-7 mm for a = sqrt(2e-7 mm / r), inside
+  // any play (and within the rounding of the numbers).
+  const double hair = std::min(1e-3, std::sqrt(2e-7 / std::max(gc.radius, 1e-9)));
+  bool ok = monotonic(gc, hair) && std::abs(gc.sweep - g.sweep) < 1e-3 &&
+            std::abs(gc.radius - gc.end_radius) < 0.01;
+  // Every axis commanded the way d says (a creep against it would be lost
+  // in the play of an axis with lost motion).
+  for (int a = 0; a < 3 && ok; ++a) {
+    const double move = c1[a] - c0[a];
+    if (move != 0 && c.bidirectional(a)) ok = (move > 0 ? 1 : -1) == d[static_cast<size_t>(a)];
+  }
+  const int samples = std::max(16, static_cast<int>(std::ceil(std::abs(g.sweep) / 0.05)));
+  for (int k = 0; k <= samples && ok; ++k) {
+    const Vector3d x = nc::point_on(cmd, static_cast<double>(k) / samples);
+    ok = nc::distance_to_path(m, x + c.error_at(x, d)) <= 0.5 * options_.tolerance_mm;
+  }
+  if (!ok) {
+    last_ = last_was;
+    before_last_ = before_last_was;
+    report_ = report_was;
+    return false;
+  }
+  const int dec = decimals();
+  if (step) {
+    bool needed = false;
+    for (int a = 0; a < 3; ++a)
+      needed = needed || std::abs(program_value(a, c0[a], false) - program_value(a, emitted_mm_[a], false)) >=
+                             half_unit(dec);
+    if (needed) {  // (a step below the output's resolution is not written, as in segment())
+      CharBuffer& l = expanded_line_;
+      l.assign(lower ? "g1" : "G1");
+      if (spaces) l.append(" ");
+      append_axis_words(c0, false, lower, spaces, l);
+      emit(l.view());
+      ++report_.lines_added;
+      emitted_mm_ = reached(c0, false);
+    }
+  }
+  // The block with its end point and centre words replaced (an R form
+  // becomes I J K), everything else kept.
+  nc::BlockEdit edit;
+  for (size_t k = 0; k < b.words.size(); ++k) {
+    const char L = b.words[k].letter;
+    if (L == 'X' || L == 'Y' || L == 'Z' || L == 'I' || L == 'J' || L == 'K' || L == 'R')
+      edit.remove.push_back(static_cast<int>(k));
+  }
+  CharBuffer& w = words_;
+  w.clear();
+  // The arc's G code stated: the output's modal motion may be the G1 of an
+  // arc linearised before this one.
+  bool stated = false;
+  for (const nc::Word& word : b.words) stated = stated || (word.letter == 'G' && (word.code10 == 20 || word.code10 == 30));
+  if (!stated) {
+    w.append(lower ? (m.clockwise ? "g2" : "g3") : (m.clockwise ? "G2" : "G3"));
+    if (spaces) w.append(" ");
+  }
+  append_axis_words(c1, false, lower, spaces, w);
+  // The centre: from where the controller starts (G91.1: the start as
+  // written under G90, where it stands under G91), or in program
+  // coordinates (G90.1).
+  for (int a : std::array<int, 2>{std::min(g.a0, g.a1), std::max(g.a0, g.a1)}) {
+    const char letter = lower ? "ijk"[a] : "IJK"[a];
+    if (spaces) w.append(" ");
+    w.append(std::string_view(&letter, 1));
+    const double centre_prog = (cmd.center_mm[a] - interp_.work_offset()[a]) / s.unit_mm;
+    double value;
+    if (s.arc_absolute)
+      value = centre_prog;
+    else if (s.absolute)
+      value = centre_prog - written(program_value(a, emitted_mm_[a], false), dec);  // the start as written
+    else
+      value = (cmd.center_mm[a] - emitted_mm_[a]) / s.unit_mm;  // where the controller stands
+    append_number(w, value, dec);
+  }
+  edit.insert = std::string(w.view());
+  emit(nc::apply_edit(b, edit));
+  ++report_.lines_changed;
+  emitted_mm_ = reached(c1, false);
+  last_dir_ = d;
+  return true;
 }
 
 bool ProgramPost::plain_line(std::string_view text) {

@@ -44,6 +44,12 @@ struct PostOptions {
   /// out of it for G85 G89) keeps the tolerance too, not only the hole's
   /// bottom. Other cycles (pecking, spindle stops) are refused with it.
   bool expand_cycles = false;
+  /// Arcs and helices (G2 G3) stay arcs where the error field allows: the
+  /// end point corrected, the centre moved by the mean correction of its
+  /// ends, the arc the controller then runs checked against the nominal
+  /// one (docs/post.md "Arcs kept as arcs"); others are linearised within
+  /// the tolerance as by default.
+  bool keep_arcs = false;
   /// Plain lines of axis words take the post's shortcut past the lexer's
   /// Block, the interpreter's checks and the line editor (docs/post.md
   /// "Speed"); the output is the same byte for byte. false: every line the

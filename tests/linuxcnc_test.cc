@@ -176,7 +176,11 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
                         // (G90/G91, L repeats, polar holes, restated cycles,
                         // the initial G99) in one program each.
                         {"tests/data/linuxcnc/polar.ngc", "", "hsu-3axis", {250, 200, 100}},
-                        {"tests/data/linuxcnc/cycles.ngc", "", "hsu-3axis", {250, 200, 100}}};
+                        {"tests/data/linuxcnc/cycles.ngc", "", "hsu-3axis", {250, 200, 100}},
+                        // Arcs kept as arcs: rs274 reads them, its arcs are ours.
+                        {"tests/data/linuxcnc/arcs.ngc", "--keep-arcs", "hsu-3axis", {150, 100, 200}},
+                        {"arcspiral.ngc", "--keep-arcs", "hsu-3axis", {250, 200, 100}},
+                        {"tort.ngc", "--keep-arcs", "hsu-3axis", {250, 200, 100}}};
   const fs::path dir = test::fresh_dir("linuxcnc");
   for (const Case& k : cases) {
     SCOPED_TRACE(k.program);
@@ -199,6 +203,16 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
     const Canon before = canonical(in, uses_tools ? tbl : "");
     const Canon after = canonical(out, uses_tools ? tbl : "");
     ASSERT_TRUE(before.ok && after.ok) << after.errors;
+    if (args == "--keep-arcs") {
+      int written = 0, read = 0;
+      std::istringstream lines(test::file_bytes(out));
+      for (std::string l; std::getline(lines, l);)
+        for (const nc::Word& w : nc::lex_block(l, 1, out).words)
+          written += w.letter == 'G' && (w.code10 == 20 || w.code10 == 30) ? 1 : 0;
+      for (const nc::Motion& mo : after.feeds) read += mo.kind == nc::MotionKind::kArc ? 1 : 0;
+      EXPECT_GT(written, 5);
+      EXPECT_EQ(read, written) << "rs274's arcs are the ones volmap wrote";
+    }
     EXPECT_TRUE(after.errors.empty()) << after.errors;
     ASSERT_FALSE(before.feeds.empty());
     // Nominal path in machine coordinates.

@@ -554,6 +554,91 @@ TEST(PostCycles, HolesApproachedWithThePlayTakenUpAndExpandedCyclesKeepTheTolera
                InputError);
 }
 
+// Arcs kept as arcs (--keep-arcs): arcs in every plane, G91, G90.1, R
+// form, helices, an inch arc, a full circle; those whose plane axes each
+// move one way are kept (corrected end and centre, the arc's G code
+// stated), the full circle and the arcs that cross a quadrant point are
+// linearised, and the real machine runs the whole within the tolerance.
+// Where no arc can be kept the output is the linearised one, byte for byte
+// (keep_arc puts back what it tried).
+// tests/data/linuxcnc/arcs.ngc: seven of its arcs can be kept.
+std::string arc_program() { return read_file(test::source_path("tests/data/linuxcnc/arcs.ngc")); }
+
+int arc_blocks(const std::string& program) {
+  int n = 0;
+  std::istringstream in(program);
+  for (std::string line; std::getline(in, line);) {
+    const nc::Block b = nc::lex_block(line, 1, "x.ngc");
+    for (const nc::Word& w : b.words) n += w.letter == 'G' && (w.code10 == 20 || w.code10 == 30) ? 1 : 0;
+  }
+  return n;
+}
+
+TEST(PostArcs, KeptWhereTheFieldAllowsWithinTheTolerance) {
+  const nc::ProgramSetup s = offset_setup(150, 100, 200);
+  for (double tol_um : {1.0, 5.0}) {
+    SCOPED_TRACE(tol_um);
+    const std::string program = arc_program();
+    std::istringstream in(program);
+    std::ostringstream out;
+    post::PostOptions o;
+    o.tolerance_mm = tol_um * 1e-3;
+    o.keep_arcs = true;
+    post::post_program(in, "arcs.ngc", out, hsu(), hsu_errors(), s, o);
+    EXPECT_EQ(arc_blocks(out.str()), 7) << out.str();
+    std::istringstream a(program), b(out.str());
+    const post::VerifyResult r = post::verify_programs(a, "arcs.ngc", b, "out.ngc", hsu(), hsu_errors(), s, {});
+    EXPECT_GT(r.before.max_um, 20.0);
+    EXPECT_LT(r.after.max_um, tol_um + 0.25) << "worst at line " << r.after.worst_line;
+  }
+  // LinuxCNC's programs: arcspiral's 2 mm arcs are kept (a tenth of the
+  // lines), tort's in three planes mostly cross quadrant points.
+  for (const char* name : {"arcspiral.ngc", "tort.ngc"}) {
+    const std::string path = std::string(kNcFiles) + name;
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "LinuxCNC programs not installed";
+    const std::string program = read_file(path);
+    const nc::ProgramSetup s2 = offset_setup(250, 200, 100);
+    post::PostOptions o;
+    o.keep_arcs = true;
+    std::istringstream in(program);
+    std::ostringstream kept;
+    post::post_program(in, name, kept, hsu(), hsu_errors(), s2, o);
+    const std::string lines = post(program, hsu_errors(), s2);
+    std::istringstream a(program), b(kept.str());
+    const post::VerifyResult r = post::verify_programs(a, name, b, "out.ngc", hsu(), hsu_errors(), s2, {});
+    EXPECT_LT(r.after.max_um, 1.25) << name << " worst at line " << r.after.worst_line;
+    EXPECT_GT(arc_blocks(kept.str()), 5) << name;
+    EXPECT_LT(kept.str().size(), lines.size()) << name;
+    if (std::string(name) == "arcspiral.ngc") {
+      EXPECT_LT(kept.str().size() * 4, lines.size());
+    }
+  }
+}
+
+TEST(PostArcs, WhereNoneIsKeptTheOutputIsTheLinearisedOne) {
+  // Full circles, quadrant crossings, a P turn, and a quarter of a 150 mm
+  // circle over which the error field is not affine enough (tried, put back).
+  const std::string program =
+      "G21 G90 G17 F300\nG0 X0 Y0 Z5\nG1 Z-1\nG2 X0 Y0 I10 J0\nG3 X20 Y0 I10 J0\n"
+      "G2 X20 Y0 I-10 J0 P2\nG18 G2 X40 Z-1 I10 K0\nG17 G1 X50\nG3 X30 Y0 R10\n"
+      "G1 X50\nG2 X200 Y150 I150 J0\nG1 X210\nM2\n";
+  const nc::ProgramSetup s = offset_setup(150, 100, 200);
+  std::string outs[2];
+  post::PostReport reports[2];
+  for (int k = 0; k < 2; ++k) {
+    std::istringstream in(program);
+    std::ostringstream out;
+    post::PostOptions o;
+    o.keep_arcs = k == 1;
+    reports[k] = post::post_program(in, "circles.ngc", out, hsu(), hsu_errors(), s, o);
+    outs[k] = out.str();
+  }
+  EXPECT_EQ(outs[1], outs[0]);
+  EXPECT_EQ(reports[1].points_corrected, reports[0].points_corrected);
+  EXPECT_EQ(reports[1].max_correction_mm, reports[0].max_correction_mm);
+  EXPECT_EQ(arc_blocks(outs[1]), 0);
+}
+
 // post --table (cli.md): the table's interpolated tool-tip error stands for
 // the model. Checked against the model itself: the real machine simulated
 // from the errors runs the table-posted program within the tolerance plus

@@ -74,6 +74,7 @@ Runner register_post(CLI::App& app) {
     int decimals = -1;
     bool clamp = false;
     bool expand_cycles = false;
+    bool keep_arcs = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand("post", "Rewrite an NC program for the real machine (correction of every point, segmented within tolerance)");
@@ -91,6 +92,9 @@ Runner register_post(CLI::App& app) {
   sub->add_flag("--clamp", o->clamp, "Hold the end value of an error table outside it (default: refuse)");
   sub->add_flag("--expand-cycles", o->expand_cycles,
                 "Write canned cycles G73 G81 G82 G83 G85 G89 out as their moves (LinuxCNC's), so the feed into the hole keeps the tolerance too (three axes)");
+  sub->add_flag("--keep-arcs", o->keep_arcs,
+                "Keep G2/G3 arcs as arcs (corrected end point and centre) where the arc the controller runs stays within "
+                "the tolerance and no axis reverses on it; others are split into lines as by default (three axes)");
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
   sub->footer("Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv \\\n"
@@ -101,6 +105,7 @@ Runner register_post(CLI::App& app) {
     const Machine m = load_machine_json(o->machine);
     if (o->five.applies(m)) {
       if (o->expand_cycles) throw UsageError("--expand-cycles is for three-axis programs");
+      if (o->keep_arcs) throw UsageError("--keep-arcs is for three-axis programs");
       return run_five_axis(*o, o->five.place_part(m));
     }
     if (o->errors.empty() && o->table.empty()) throw UsageError("post needs --errors or --table");
@@ -122,6 +127,7 @@ Runner register_post(CLI::App& app) {
     opt.decimals = o->decimals;
     opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
     opt.expand_cycles = o->expand_cycles;
+    opt.keep_arcs = o->keep_arcs;
     std::ifstream file_in;
     std::istream* in = &std::cin;
     std::string in_name = "<stdin>";
