@@ -1077,7 +1077,18 @@ bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Correc
     const double move = c1[a] - c0[a];
     if (move != 0 && c.bidirectional(a)) ok = (move > 0 ? 1 : -1) == d[static_cast<size_t>(a)];
   }
-  const int samples = std::max(16, static_cast<int>(std::ceil(std::abs(g.sweep) / 0.05)));
+  // Samples close enough that the deviation grows by at most 5 % of the
+  // tolerance between two: its second derivative along the arc is at most
+  // M = K r^2 + 2 L r (the field's curvature and Lipschitz bounds; the
+  // corrected and nominal circles differ by the correction, whose own
+  // change over the arc the same bounds hold), so steps of
+  // sqrt(8 * 0.05 tol / M) rad.
+  const double r_max = std::max(g.radius, g.end_radius);
+  const double M = c.curvature_bound() * r_max * r_max + 2 * c.lipschitz_bound() * r_max;
+  const double step_rad = std::min(0.05, M > 0 ? std::sqrt(0.4 * options_.tolerance_mm / M) : 0.05);
+  const double wanted = std::ceil(std::abs(g.sweep) / step_rad);
+  if (!(wanted <= 1e5)) ok = false;  // (no bounds: a table; or a huge arc)
+  const int samples = ok ? std::max(16, static_cast<int>(wanted)) : 0;
   for (int k = 0; k <= samples && ok; ++k) {
     const Vector3d x = nc::point_on(cmd, static_cast<double>(k) / samples);
     ok = nc::distance_to_path(m, x + c.error_at(x, d)) <= 0.5 * options_.tolerance_mm;
