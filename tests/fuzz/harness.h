@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -23,6 +24,8 @@
 #include "core/recordings.h"
 #include "gcode/nc_block.h"
 #include "gcode/nc_interpreter.h"
+#include "core/errors_csv.h"
+#include "postproc/post_program.h"
 
 namespace volmap::fuzz {
 
@@ -51,6 +54,14 @@ inline void nc_reader(std::string_view program) {
         std::string_view text = program.substr(pos, eol - pos);
         if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
         const nc::Block b = nc::lex_block(text, ++number, "fuzz.ngc");
+        // The post's shortcut reads a plain line's words as the lexer does.
+        nc::PlainAxisWords plain;
+        if (nc::lex_plain_axis_words(text, plain)) {
+          require(static_cast<int>(b.words.size()) == plain.count);
+          for (const nc::Word& w : b.words)
+            require(w.letter >= 'X' && w.letter <= 'Z' && (plain.given >> (w.letter - 'X') & 1u) &&
+                    std::memcmp(&w.value, &plain.value[w.letter - 'X'], sizeof(double)) == 0);
+        }
         interp.execute(b, fx);
         if (fx.has_motion) {
           const nc::Motion& m = fx.motion;
@@ -63,6 +74,54 @@ inline void nc_reader(std::string_view program) {
     } catch (const InputError&) {
     }
   }
+}
+
+/// volmap post (three axes) on the sample machine and its errors: the first
+/// byte chooses the options (--keep-arcs, --expand-cycles, the tolerance,
+/// decimals), the rest is the program, of which the first 16 lines are
+/// posted (arcs of up to 65 536 pieces each stay well inside the time
+/// limit). The program is posted with and without the shortcut of plain
+/// lines: both must refuse it with the same InputError or write the same
+/// bytes and count the same.
+inline void post(std::string_view input) {
+  if (input.empty()) return;
+  static const Machine machine = load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/hsu-3axis.json");
+  static const ErrorSet errors = load_errors_csv(std::string(VOLMAP_SOURCE_DIR) + "/samples/errors/hsu-3axis.csv");
+  const auto options = static_cast<unsigned char>(input[0]);
+  std::string_view program = input.substr(1);
+  size_t cut = 0;
+  for (int line = 0; line < 16 && cut != std::string_view::npos; ++line) {
+    cut = program.find('\n', cut);
+    if (cut != std::string_view::npos) ++cut;
+  }
+  if (cut != std::string_view::npos) program = program.substr(0, cut);
+  nc::ProgramSetup setup;
+  setup.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
+  setup.tool_length_mm[1] = 12.5;
+  setup.initial_position_mm = Eigen::Vector3d(250, 200, 150);
+  std::string out[2], error[2];
+  post::PostReport report[2];
+  for (int k = 0; k < 2; ++k) {
+    post::PostOptions o;
+    o.keep_arcs = options & 1u;
+    o.expand_cycles = options & 2u;
+    o.tolerance_mm = (options & 4u) ? 5e-3 : 1e-3;
+    o.decimals = (options & 8u) ? 6 : -1;
+    o.shortcuts = k == 0;
+    std::istringstream in{std::string(program)};
+    std::ostringstream os;
+    try {
+      report[k] = post::post_program(in, "fuzz.ngc", os, machine, errors, setup, o);
+    } catch (const InputError& e) {
+      error[k] = e.what();
+    }
+    out[k] = os.str();
+  }
+  require(error[0] == error[1]);
+  require(out[0] == out[1]);
+  require(report[0].lines == report[1].lines && report[0].lines_changed == report[1].lines_changed &&
+          report[0].lines_added == report[1].lines_added &&
+          report[0].points_corrected == report[1].points_corrected);
 }
 
 /// The recordings CSV reader, and the writer on what it read.
