@@ -1007,26 +1007,25 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   emitted_known_ = true;
 }
 
-// Arcs kept as arcs (PostOptions::keep_arcs). The controller runs an arc
-// from where it stands (the corrected start c0) to the written end about the
-// written centre, its radius going linearly from start to end (nc::point_on,
-// as verify simulates it). The end is the corrected end point; the centre is
+// Arcs kept as arcs (PostOptions::keep_arcs, docs/post.md). The controller
+// runs an arc from where it stands to the written end about the written
+// centre, its radius going linearly from start to end (nc::point_on, as
+// verify simulates it). The end is the corrected end point; the centre is
 // the nominal one moved by the mean of the corrections at the arc's ends
-// (for an error field that is affine over the arc, the corrected points of
-// the nominal arc lie on a slightly distorted circle about it). Kept only
-// when the actual tip along that arc stays within half the tolerance of the
-// nominal path at samples 0.05 rad apart at most (the deviation's second
-// derivative along the arc is of the order of the correction, some 1e-2 mm
-// per rad^2: between samples it grows by less than 1e-5 mm; the other half
-// of the tolerance is left to the rounding of the written numbers), and
-// when no axis reverses on the way (a reversal's lost-motion step cannot be
-// taken up inside an arc): the plane's axes move one way each over the
-// whole sweep, and the directions the arc starts with are those the axes
-// last moved in, as far as the errors tell them apart. Full circles, P
-// turns, polar words and sweeps near a full turn are linearised.
+// (for an error field affine over the arc, the corrected points of the
+// nominal arc lie on a slightly distorted circle about it). Kept only when
+// the actual tip along that arc stays within half the tolerance of the
+// nominal path at samples as dense as the field's bounds require, and when
+// no axis reverses on the way (a lost-motion step cannot be taken up inside
+// an arc): the plane's axes move one way each over the whole sweep; an axis
+// that reverses at the start gets its take-up step first, as a G1. Full
+// circles, P turns, polar words, G53 and sweeps near a full turn are
+// linearised.
 bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Corrector& c, bool lower,
                            bool spaces) {
   if (m.extra_turns != 0 || b.has('@') || b.has('^') || !emitted_known_) return false;
+  for (const nc::Word& w : b.words)
+    if (w.letter == 'G' && w.code10 == 530) return false;
   // An arc whose plane axes each move one way: no multiple of pi/2 inside
   // its sweep farther than `margin` (rad) from its ends, and not near a full
   // turn.
