@@ -1007,154 +1007,209 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   emitted_known_ = true;
 }
 
-// Arcs kept as arcs (PostOptions::keep_arcs, docs/post.md). The controller
-// runs an arc from where it stands to the written end about the written
-// centre, its radius going linearly from start to end (nc::point_on, as
-// verify simulates it). The end is the corrected end point; the centre is
-// the nominal one moved by the mean of the corrections at the arc's ends
-// (for an error field affine over the arc, the corrected points of the
-// nominal arc lie on a slightly distorted circle about it). Kept only when
-// the actual tip along that arc stays within half the tolerance of the
-// nominal path at samples as dense as the field's bounds require, and when
-// no axis reverses on the way (a lost-motion step cannot be taken up inside
-// an arc): the plane's axes move one way each over the whole sweep; an axis
-// that reverses at the start gets its take-up step first, as a G1. Full
-// circles, P turns, polar words, G53 and sweeps near a full turn are
-// linearised.
+// Arcs kept as arcs (PostOptions::keep_arcs, docs/post.md). An arc is cut
+// at the points where an axis of its plane turns round (its quadrant
+// points): on each piece every axis moves one way, and a lost-motion step
+// can be taken up between pieces (a G1 to the piece's start commanded with
+// its directions), never inside an arc. The controller runs each piece from
+// where it stands to the written end about the written centre, its radius
+// going linearly from start to end (nc::point_on, as verify simulates it).
+// The end is the corrected end point; the centre is the nominal one moved
+// by the mean of the corrections at the piece's ends (for an error field
+// affine over the piece, the corrected points of the nominal arc lie on a
+// slightly distorted circle about it). Kept only when, for every piece, the
+// actual tip stays within half the tolerance of the nominal path at samples
+// as dense as the field's bounds require; otherwise the whole block is
+// linearised as without the option, and everything tried is put back.
+// Polar words, G53 and inverse time with a take-up step are linearised.
 bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Corrector& c, bool lower,
                            bool spaces) {
-  if (m.extra_turns != 0 || b.has('@') || b.has('^') || !emitted_known_) return false;
+  if (b.has('@') || b.has('^') || !emitted_known_) return false;
   for (const nc::Word& w : b.words)
     if (w.letter == 'G' && w.code10 == 530) return false;
-  // An arc whose plane axes each move one way: no multiple of pi/2 inside
-  // its sweep farther than `margin` (rad) from its ends, and not near a full
-  // turn.
-  auto monotonic = [](const nc::ArcGeometry& g, double margin) {
-    if (!(std::abs(g.sweep) < 2 * M_PI - 0.1)) return false;
-    const double lo = std::min(g.start_angle, g.start_angle + g.sweep) + margin,
-                 hi = std::max(g.start_angle, g.start_angle + g.sweep) - margin;
-    return std::floor(lo / (M_PI / 2)) * (M_PI / 2) + M_PI / 2 >= hi;
-  };
   const nc::ArcGeometry g = nc::arc_geometry(m);
-  if (!monotonic(g, 1e-12)) return false;
-  // The arc's approach directions: the plane's axes from the sweep (the
-  // tangent at its middle), the normal axis from the helix, else kept.
-  const Vector3d mid_tangent = nc::point_on(m, 0.5 + 1e-3) - nc::point_on(m, 0.5 - 1e-3);
-  ApproachDirections d = last_dir_;
-  for (int a : {g.a0, g.a1})
-    if (mid_tangent[a] != 0) d[static_cast<size_t>(a)] = mid_tangent[a] > 0 ? 1 : -1;
-  if (m.end_mm[g.normal] != m.start_mm[g.normal])
-    d[static_cast<size_t>(g.normal)] = m.end_mm[g.normal] > m.start_mm[g.normal] ? 1 : -1;
-  // An axis that reverses at the arc's start (or starts moving) takes up
-  // its play first: the start point commanded with the arc's directions, in
-  // a G1 of its own (segment()'s take-up step), then the arc from there.
-  const nc::State& s = interp_.state();
-  const bool step = !c.same_error(last_dir_, d);
-  if (step && s.feed_mode == 930) return false;  // the step's own F: linearised instead
-  // What command() changes: put back if the arc is not kept.
-  const LastCorrected last_was = last_, before_last_was = before_last_;
-  const PostReport report_was = report_;
-  const Vector3d c0 = step ? command(c, m.start_mm, d) : emitted_mm_;
-  const Vector3d c1 = command(c, m.end_mm, d);
-  nc::Motion cmd = m;
-  cmd.start_mm = c0;
-  cmd.end_mm = c1;
-  const Vector3d shift = 0.5 * ((c0 - m.start_mm) + (c1 - m.end_mm));
-  cmd.center_mm[g.a0] = m.center_mm[g.a0] + shift[g.a0];
-  cmd.center_mm[g.a1] = m.center_mm[g.a1] + shift[g.a1];
-  const nc::ArcGeometry gc = nc::arc_geometry(cmd);
-  // The corrected arc may begin or end a hair past a quadrant point the
-  // nominal one begins or ends at: an axis then backs up by r (1 - cos a)
-  // before it moves on, under 1e-7 mm for a = sqrt(2e-7 mm / r), inside
-  // any play (and within the rounding of the numbers).
-  const double hair = std::min(1e-3, std::sqrt(2e-7 / std::max(gc.radius, 1e-9)));
-  bool ok = monotonic(gc, hair) && std::abs(gc.sweep - g.sweep) < 1e-3 &&
-            std::abs(gc.radius - gc.end_radius) < 0.01;
-  // Every axis commanded the way d says (a creep against it would be lost
-  // in the play of an axis with lost motion).
-  for (int a = 0; a < 3 && ok; ++a) {
-    const double move = c1[a] - c0[a];
-    if (move != 0 && c.bidirectional(a)) ok = (move > 0 ? 1 : -1) == d[static_cast<size_t>(a)];
+  if (!(std::abs(g.sweep) > 1e-9)) return false;
+  // The pieces: cut where the angle passes a multiple of pi/2, but not
+  // within a hair of an end (a = sqrt(2e-7 mm / r): an axis backs up by
+  // r (1 - cos a) < 1e-7 mm past such a point, inside any play and the
+  // numbers' rounding); no sliver pieces.
+  const double hair = std::min(1e-3, std::sqrt(2e-7 / std::max(std::min(g.radius, g.end_radius), 1e-9)));
+  std::vector<double> cuts = {0.0};
+  {
+    const double dir = g.sweep > 0 ? 1.0 : -1.0, quarter = M_PI / 2, margin = hair / std::abs(g.sweep);
+    double q = dir > 0 ? std::floor(g.start_angle / quarter) + 1 : std::ceil(g.start_angle / quarter) - 1;
+    for (int guard = 0; guard < 4 * 1024; ++guard, q += dir) {
+      const double s_cut = (q * quarter - g.start_angle) / g.sweep;
+      if (s_cut >= 1.0 - margin) break;
+      if (s_cut > margin) cuts.push_back(s_cut);
+    }
+    cuts.push_back(1.0);
+    if (cuts.size() > 4 * 1024) return false;
   }
+  const nc::State& s = interp_.state();
+  const int dec = decimals();
+  const double r_max = std::max(g.radius, g.end_radius);
   // Samples close enough that the deviation grows by at most 5 % of the
   // tolerance between two: its second derivative along the arc is at most
   // M = K r^2 + 2 L r (the field's curvature and Lipschitz bounds; the
-  // corrected and nominal circles differ by the correction, whose own
-  // change over the arc the same bounds hold), so steps of
-  // sqrt(8 * 0.05 tol / M) rad.
-  const double r_max = std::max(g.radius, g.end_radius);
+  // corrected and nominal circles differ by the correction, whose change
+  // over the arc the same bounds hold), so steps of sqrt(8 * 0.05 tol / M)
+  // rad. No bounds (a compensation table): linearised.
   const double M = c.curvature_bound() * r_max * r_max + 2 * c.lipschitz_bound() * r_max;
   const double step_rad = std::min(0.05, M > 0 ? std::sqrt(0.4 * options_.tolerance_mm / M) : 0.05);
-  const double wanted = std::ceil(std::abs(g.sweep) / step_rad);
-  if (!(wanted <= 1e5)) ok = false;  // (no bounds: a table; or a huge arc)
-  const int samples = ok ? std::max(16, static_cast<int>(wanted)) : 0;
-  for (int k = 0; k <= samples && ok; ++k) {
-    const Vector3d x = nc::point_on(cmd, static_cast<double>(k) / samples);
-    ok = nc::distance_to_path(m, x + c.error_at(x, d)) <= 0.5 * options_.tolerance_mm;
-  }
-  if (!ok) {
+  if (!(step_rad > 0) || !(std::abs(g.sweep) / step_rad <= 1e6)) return false;
+  // What the pieces change: put back if the block is not kept.
+  const LastCorrected last_was = last_, before_last_was = before_last_;
+  const PostReport report_was = report_;
+  const Vector3d emitted_was = emitted_mm_;
+  const ApproachDirections last_dir_was = last_dir_;
+  auto give_up = [&] {
     last_ = last_was;
     before_last_ = before_last_was;
     report_ = report_was;
+    emitted_mm_ = emitted_was;
+    last_dir_ = last_dir_was;
     return false;
-  }
-  const int dec = decimals();
-  if (step) {
-    bool needed = false;
-    for (int a = 0; a < 3; ++a)
-      needed = needed || std::abs(program_value(a, c0[a], false) - program_value(a, emitted_mm_[a], false)) >=
-                             half_unit(dec);
-    if (needed) {  // (a step below the output's resolution is not written, as in segment())
-      CharBuffer& l = expanded_line_;
-      l.assign(lower ? "g1" : "G1");
-      if (spaces) l.append(" ");
-      append_axis_words(c0, false, lower, spaces, l);
-      emit(l.view());
-      ++report_.lines_added;
-      emitted_mm_ = reached(c0, false);
+  };
+  const char* arc_code = lower ? (m.clockwise ? "g2" : "g3") : (m.clockwise ? "G2" : "G3");
+  // The lines, in order: arcs and take-up steps (G1), their words.
+  struct Line {
+    bool arc;
+    std::string words;
+  };
+  std::vector<Line> lines;
+  for (size_t k = 0; k + 1 < cuts.size(); ++k) {
+    nc::Motion piece = m;
+    piece.extra_turns = 0;
+    piece.start_mm = k == 0 ? m.start_mm : nc::point_on(m, cuts[k]);
+    piece.end_mm = nc::point_on(m, cuts[k + 1]);
+    const nc::ArcGeometry pg = nc::arc_geometry(piece);
+    // (A piece that arc_geometry reads as a full turn, or backwards: give up.)
+    if (!(std::abs(pg.sweep - g.sweep * (cuts[k + 1] - cuts[k])) < 1e-6)) return give_up();
+    // Its directions: the plane's axes from the tangent at its middle, the
+    // normal axis from the helix, else as they were.
+    const Vector3d mid_tangent =
+        nc::point_on(piece, 0.5 + 1e-3) - nc::point_on(piece, 0.5 - 1e-3);
+    ApproachDirections d = last_dir_;
+    for (int a : {g.a0, g.a1})
+      if (mid_tangent[a] != 0) d[static_cast<size_t>(a)] = mid_tangent[a] > 0 ? 1 : -1;
+    if (m.end_mm[g.normal] != m.start_mm[g.normal])
+      d[static_cast<size_t>(g.normal)] = m.end_mm[g.normal] > m.start_mm[g.normal] ? 1 : -1;
+    // An axis that turns round here takes up its play first.
+    bool step = false;
+    Vector3d c0, c1;
+    auto solve = [&] {
+      step = !c.same_error(last_dir_, d);
+      c0 = step ? command(c, piece.start_mm, d) : emitted_mm_;
+      c1 = command(c, piece.end_mm, d);
+    };
+    solve();
+    // The plane's normal axis, when the arc does not move it, may still be
+    // commanded to creep (the correction varies along the arc), linearly
+    // over the piece: it takes the creep's direction (segment()'s
+    // settle_directions), its play taken up by the step.
+    if (const int n = g.normal; m.end_mm[n] == m.start_mm[n] && c.bidirectional(n)) {
+      const double creep = c1[n] - c0[n];
+      if (creep != 0 && (creep > 0 ? 1 : -1) != d[static_cast<size_t>(n)]) {
+        d[static_cast<size_t>(n)] = creep > 0 ? 1 : -1;
+        solve();
+      }
     }
+    if (step && s.feed_mode == 930) return give_up();  // the step's own F: linearised instead
+    nc::Motion cmd = piece;
+    cmd.start_mm = c0;
+    cmd.end_mm = c1;
+    const Vector3d shift = 0.5 * ((c0 - piece.start_mm) + (c1 - piece.end_mm));
+    cmd.center_mm[g.a0] = m.center_mm[g.a0] + shift[g.a0];
+    cmd.center_mm[g.a1] = m.center_mm[g.a1] + shift[g.a1];
+    const nc::ArcGeometry gc = nc::arc_geometry(cmd);
+    if (!(std::abs(gc.sweep - pg.sweep) < 1e-3) || !(std::abs(gc.radius - gc.end_radius) < 0.01)) return give_up();
+    // Every axis commanded the way d says (a creep against it would be lost
+    // in the play of an axis with lost motion). The corrected piece may
+    // begin or end a hair past the quadrant point the nominal one begins or
+    // ends at: the axis backs up by r (1 - cos a), under 1e-7 mm for
+    // a = sqrt(2e-7 mm / r), inside any play and the numbers' rounding.
+    for (int a = 0; a < 3; ++a) {
+      const double move = c1[a] - c0[a];
+      if (move != 0 && c.bidirectional(a) && (move > 0 ? 1 : -1) != d[static_cast<size_t>(a)]) return give_up();
+    }
+    {
+      const double lo = std::min(gc.start_angle, gc.start_angle + gc.sweep) + 2 * hair,
+                   hi = std::max(gc.start_angle, gc.start_angle + gc.sweep) - 2 * hair;
+      if (std::floor(lo / (M_PI / 2)) * (M_PI / 2) + M_PI / 2 < hi) return give_up();
+    }
+    // An arc whose written ends would coincide is a full circle to the
+    // controller: such a piece is not written as an arc.
+    if (!((c1 - c0).norm() > 40 * half_unit(dec) * s.unit_mm)) return give_up();
+    const int samples = std::max(16, static_cast<int>(std::ceil(std::abs(pg.sweep) / step_rad)));
+    for (int j = 0; j <= samples; ++j) {
+      const Vector3d x = nc::point_on(cmd, static_cast<double>(j) / samples);
+      if (!(nc::distance_to_path(m, x + c.error_at(x, d)) <= 0.5 * options_.tolerance_mm)) return give_up();
+    }
+    // The piece's lines: the take-up step (unless below the output's
+    // resolution, as in segment()), then the arc.
+    if (step) {
+      bool needed = false;
+      for (int a = 0; a < 3; ++a)
+        needed = needed || std::abs(program_value(a, c0[a], false) - program_value(a, emitted_mm_[a], false)) >=
+                               half_unit(dec);
+      if (needed) {
+        CharBuffer& l = expanded_line_;
+        l.clear();
+        append_axis_words(c0, false, lower, spaces, l);
+        lines.push_back({false, std::string(l.view())});
+        emitted_mm_ = reached(c0, false);
+      }
+    }
+    CharBuffer& w = words_;
+    w.clear();
+    append_axis_words(c1, false, lower, spaces, w);
+    // The centre: from where the controller starts (G91.1: the start as
+    // written under G90, where it stands under G91), or in program
+    // coordinates (G90.1).
+    for (int a : std::array<int, 2>{std::min(g.a0, g.a1), std::max(g.a0, g.a1)}) {
+      const char letter = lower ? "ijk"[a] : "IJK"[a];
+      if (spaces) w.append(" ");
+      w.append(std::string_view(&letter, 1));
+      const double centre_prog = (cmd.center_mm[a] - interp_.work_offset()[a]) / s.unit_mm;
+      double value;
+      if (s.arc_absolute)
+        value = centre_prog;
+      else if (s.absolute)
+        value = centre_prog - written(program_value(a, emitted_mm_[a], false), dec);  // the start as written
+      else
+        value = (cmd.center_mm[a] - emitted_mm_[a]) / s.unit_mm;  // where the controller stands
+      append_number(w, value, dec);
+    }
+    lines.push_back({true, std::string(w.view())});
+    emitted_mm_ = reached(c1, false);
+    last_dir_ = d;
   }
-  // The block with its end point and centre words replaced (an R form
-  // becomes I J K), everything else kept.
+  // Kept: the lines out. The first takes the block's place: the block keeps
+  // its other words (its modes apply to all that follows), its end point and
+  // centre words are replaced (an R form becomes I J K, a P gives way to
+  // the pieces), and the motion is stated: the arc's G2/G3 (the block may
+  // rely on the modal one, and an arc linearised before it left the output
+  // in G1), or G1 for a take-up step, in place of the block's G2/G3.
   nc::BlockEdit edit;
-  for (size_t k = 0; k < b.words.size(); ++k) {
-    const char L = b.words[k].letter;
-    if (L == 'X' || L == 'Y' || L == 'Z' || L == 'I' || L == 'J' || L == 'K' || L == 'R')
-      edit.remove.push_back(static_cast<int>(k));
-  }
-  CharBuffer& w = words_;
-  w.clear();
-  // The arc's G code stated: the output's modal motion may be the G1 of an
-  // arc linearised before this one.
   bool stated = false;
-  for (const nc::Word& word : b.words) stated = stated || (word.letter == 'G' && (word.code10 == 20 || word.code10 == 30));
-  if (!stated) {
-    w.append(lower ? (m.clockwise ? "g2" : "g3") : (m.clockwise ? "G2" : "G3"));
-    if (spaces) w.append(" ");
+  for (size_t k = 0; k < b.words.size(); ++k) {
+    const nc::Word& word = b.words[k];
+    const char L = word.letter;
+    const bool motion = L == 'G' && (word.code10 == 20 || word.code10 == 30);
+    if (L == 'X' || L == 'Y' || L == 'Z' || L == 'I' || L == 'J' || L == 'K' || L == 'R' || L == 'P' ||
+        (motion && !lines[0].arc))
+      edit.remove.push_back(static_cast<int>(k));
+    stated = stated || motion;
   }
-  append_axis_words(c1, false, lower, spaces, w);
-  // The centre: from where the controller starts (G91.1: the start as
-  // written under G90, where it stands under G91), or in program
-  // coordinates (G90.1).
-  for (int a : std::array<int, 2>{std::min(g.a0, g.a1), std::max(g.a0, g.a1)}) {
-    const char letter = lower ? "ijk"[a] : "IJK"[a];
-    if (spaces) w.append(" ");
-    w.append(std::string_view(&letter, 1));
-    const double centre_prog = (cmd.center_mm[a] - interp_.work_offset()[a]) / s.unit_mm;
-    double value;
-    if (s.arc_absolute)
-      value = centre_prog;
-    else if (s.absolute)
-      value = centre_prog - written(program_value(a, emitted_mm_[a], false), dec);  // the start as written
-    else
-      value = (cmd.center_mm[a] - emitted_mm_[a]) / s.unit_mm;  // where the controller stands
-    append_number(w, value, dec);
-  }
-  edit.insert = std::string(w.view());
+  const char* first_code = lines[0].arc ? (stated ? "" : arc_code) : (lower ? "g1" : "G1");
+  edit.insert = std::string(first_code) + (*first_code && spaces ? " " : "") + lines[0].words;
   emit(nc::apply_edit(b, edit));
   ++report_.lines_changed;
-  emitted_mm_ = reached(c1, false);
-  last_dir_ = d;
+  for (size_t k = 1; k < lines.size(); ++k) {
+    emit(std::string(lines[k].arc ? arc_code : (lower ? "g1" : "G1")) + (spaces ? " " : "") + lines[k].words);
+    ++report_.lines_added;
+  }
   return true;
 }
 

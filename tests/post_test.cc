@@ -555,13 +555,13 @@ TEST(PostCycles, HolesApproachedWithThePlayTakenUpAndExpandedCyclesKeepTheTolera
 }
 
 // Arcs kept as arcs (--keep-arcs): arcs in every plane, G91, G90.1, R
-// form, helices, an inch arc, a full circle; those whose plane axes each
-// move one way are kept (corrected end and centre, the arc's G code
-// stated), the full circle and the arcs that cross a quadrant point are
-// linearised, and the real machine runs the whole within the tolerance.
-// Where no arc can be kept the output is the linearised one, byte for byte
-// (keep_arc puts back what it tried).
-// tests/data/linuxcnc/arcs.ngc: seven of its arcs can be kept.
+// form, helices, an inch arc, a full circle, arcs over several quadrants.
+// Each becomes arcs cut at its quadrant points (no axis turns round inside
+// one; take-up steps between them), with corrected ends and centres, the
+// arc's G code stated; the real machine runs the whole within the
+// tolerance. Where an arc cannot be kept the output is the linearised one,
+// byte for byte (keep_arc puts back what it tried).
+// tests/data/linuxcnc/arcs.ngc: its 11 arc blocks become 16 arcs.
 std::string arc_program() { return read_file(test::source_path("tests/data/linuxcnc/arcs.ngc")); }
 
 int arc_blocks(const std::string& program) {
@@ -585,14 +585,14 @@ TEST(PostArcs, KeptWhereTheFieldAllowsWithinTheTolerance) {
     o.tolerance_mm = tol_um * 1e-3;
     o.keep_arcs = true;
     post::post_program(in, "arcs.ngc", out, hsu(), hsu_errors(), s, o);
-    EXPECT_EQ(arc_blocks(out.str()), 7) << out.str();
+    EXPECT_EQ(arc_blocks(out.str()), 16) << out.str();
     std::istringstream a(program), b(out.str());
     const post::VerifyResult r = post::verify_programs(a, "arcs.ngc", b, "out.ngc", hsu(), hsu_errors(), s, {});
     EXPECT_GT(r.before.max_um, 20.0);
     EXPECT_LT(r.after.max_um, tol_um + 0.25) << "worst at line " << r.after.worst_line;
   }
-  // LinuxCNC's programs: arcspiral's 2 mm arcs are kept (a tenth of the
-  // lines), tort's in three planes mostly cross quadrant points.
+  // LinuxCNC's programs: arcspiral's 2 mm arcs and tort's helices in three
+  // planes.
   for (const char* name : {"arcspiral.ngc", "tort.ngc"}) {
     const std::string path = std::string(kNcFiles) + name;
     if (!std::filesystem::exists(path)) GTEST_SKIP() << "LinuxCNC programs not installed";
@@ -616,12 +616,9 @@ TEST(PostArcs, KeptWhereTheFieldAllowsWithinTheTolerance) {
 }
 
 TEST(PostArcs, WhereNoneIsKeptTheOutputIsTheLinearisedOne) {
-  // Full circles, quadrant crossings, a P turn, and a quarter of a 150 mm
-  // circle over which the error field is not affine enough (tried, put back).
-  const std::string program =
-      "G21 G90 G17 F300\nG0 X0 Y0 Z5\nG1 Z-1\nG2 X0 Y0 I10 J0\nG3 X20 Y0 I10 J0\n"
-      "G2 X20 Y0 I-10 J0 P2\nG18 G2 X40 Z-1 I10 K0\nG17 G1 X50\nG3 X30 Y0 R10\n"
-      "G1 X50\nG2 X200 Y150 I150 J0\nG1 X210\nM2\n";
+  // A quarter of a 150 mm circle over which the error field is not affine
+  // enough (tried, put back).
+  const std::string program = "G21 G90 G17 F300\nG0 X0 Y0 Z5\nG1 Z-1\nG1 X50\nG2 X200 Y150 I150 J0\nG1 X210\nM2\n";
   const nc::ProgramSetup s = offset_setup(150, 100, 200);
   std::string outs[2];
   post::PostReport reports[2];
