@@ -1021,7 +1021,8 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
 // actual tip stays within half the tolerance of the nominal path at samples
 // as dense as the field's bounds require; otherwise the whole block is
 // linearised as without the option, and everything tried is put back.
-// Polar words, G53 and inverse time with a take-up step are linearised.
+// Polar words, G53 and, under inverse time, an arc that needs more than its
+// own line are linearised.
 bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Corrector& c, bool lower,
                            bool spaces) {
   if (b.has('@') || b.has('^') || !emitted_known_) return false;
@@ -1185,6 +1186,8 @@ bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Correc
     emitted_mm_ = reached(c1, false);
     last_dir_ = d;
   }
+  // Under G93 every line needs its own F (inverse time): one line only.
+  if (s.feed_mode == 930 && lines.size() > 1) return give_up();
   // Kept: the lines out. The first takes the block's place: the block keeps
   // its other words (its modes apply to all that follows), its end point and
   // centre words are replaced (an R form becomes I J K, a P gives way to

@@ -617,8 +617,11 @@ TEST(PostArcs, KeptWhereTheFieldAllowsWithinTheTolerance) {
 
 TEST(PostArcs, WhereNoneIsKeptTheOutputIsTheLinearisedOne) {
   // A quarter of a 150 mm circle over which the error field is not affine
-  // enough (tried, put back).
-  const std::string program = "G21 G90 G17 F300\nG0 X0 Y0 Z5\nG1 Z-1\nG1 X50\nG2 X200 Y150 I150 J0\nG1 X210\nM2\n";
+  // enough (tried, put back), and a half circle under inverse time (G93),
+  // which would take two arcs, each needing its own F.
+  const std::string program =
+      "G21 G90 G17 F300\nG0 X0 Y0 Z5\nG1 Z-1\nG1 X50\nG2 X200 Y150 I150 J0\nG1 X210\n"
+      "G93 G3 X230 Y150 I10 J0 F30\nG94 G1 X240 F300\nM2\n";
   const nc::ProgramSetup s = offset_setup(150, 100, 200);
   std::string outs[2];
   post::PostReport reports[2];
