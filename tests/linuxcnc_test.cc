@@ -503,7 +503,9 @@ TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
 // G43/G49, G93), posted and run by rs274: rs274 and volmap accept the same
 // ones, rs274 accepts every output, and the output passes through every
 // point the input does (rs274's canonical end points, in order, within
-// 0.05 mm: the correction is micrometres).
+// 0.05 mm: the correction is micrometres). Every other program is posted
+// with --keep-arcs, and its output, run on the model by volmap verify,
+// keeps the tolerance between the points too.
 TEST(LinuxCnc, RandomCamProgramsPostedPassThroughTheSamePoints) {
   require_rs274();
   const fs::path dir = test::fresh_dir("cam");
@@ -588,32 +590,60 @@ TEST(LinuxCnc, RandomCamProgramsPostedPassThroughTheSamePoints) {
     return p + "M2\n";
   };
   const std::string in = (dir / "cam.ngc").string(), out = (dir / "cam-post.ngc").string();
-  int both = 0;
+  int both = 0, kept_arcs = 0;  // kept_arcs: outputs with arcs in them
   for (int n = 0; n < 150; ++n) {
     const std::string text = program();
     std::ofstream(in, std::ios::binary) << text;
     const Canon input = canonical(in, tbl_inch);
     const std::string log = out + ".err";
     fs::remove(out);
-    const bool volmap_ok = std::system(hsu_post_command("--work-offset 250,200,150 --clamp --tool-table " + tbl_mm + " " +
-                                                        in + " -o " + out + " 2>" + log)
+    // Every other program keeps its arcs as arcs (--keep-arcs).
+    const std::string keep = n % 2 ? "--keep-arcs " : "";
+    const bool volmap_ok = std::system(hsu_post_command("--work-offset 250,200,150 --clamp " + keep + "--tool-table " +
+                                                        tbl_mm + " " + in + " -o " + out + " 2>" + log)
                                            .c_str()) == 0;
     const std::string err = test::file_bytes(log);
-    SCOPED_TRACE(text + "volmap: " + err);
+    SCOPED_TRACE(keep + text + "volmap: " + err);
     EXPECT_EQ(volmap_ok, input.ok);
     if (!input.ok || !volmap_ok) continue;
     ++both;
     const Canon posted = canonical(out, tbl_inch);
     ASSERT_TRUE(posted.ok) << "rs274 refuses volmap's output";
+    for (const nc::Motion& mo : posted.feeds)
+      if (mo.kind == nc::MotionKind::kArc) {
+        ++kept_arcs;
+        break;
+      }
     size_t next = 0;
     for (const auto& [p, feed] : input.points) {
       while (next < posted.points.size() && (posted.points[next].first - p).cwiseAbs().maxCoeff() >= 0.05) ++next;
       ASSERT_LT(next, posted.points.size()) << "the output never passes through " << p.transpose();
       ++next;
     }
+    if (keep.empty()) continue;
+    // Kept arcs pass through the same end points even when wrong (a full
+    // circle instead of a sliver): the machine's path, sampled between the
+    // points too, keeps the tolerance (1 um, plus the rounding of inch
+    // numbers).
+    const std::string json = (dir / "verify.json").string();
+    const std::string verify = test::volmap_binary() + " verify --machine " +
+                               test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
+                               test::source_path("samples/errors/hsu-3axis.csv") +
+                               " --work-offset 250,200,150 --clamp --tool-table " + tbl_mm + " --nominal " + in +
+                               " --program " + out + " --json > " + json;
+    ASSERT_EQ(std::system(verify.c_str()), 0);
+    const std::string report = test::file_bytes(json);
+    const size_t after = report.find("\"after\"");
+    ASSERT_NE(after, std::string::npos) << report;
+    const size_t max_at = report.find("\"max_um\"", after);
+    const double after_um = std::strtod(report.c_str() + report.find(':', max_at) + 1, nullptr);
+    EXPECT_LT(after_um, 1.5) << report;
   }
   EXPECT_GT(both, 100);
-  std::printf("random CAM programs: %d of 150 posted and run through the same points by rs274\n", both);
+  EXPECT_GT(kept_arcs, 20);
+  std::printf("random CAM programs: %d of 150 posted (every other with --keep-arcs: %d outputs with arcs kept) and run "
+              "through the same points by rs274\n",
+              both, kept_arcs);
 }
 
 }  // namespace
