@@ -669,6 +669,27 @@ TEST(PostTable, ATablePostedProgramRunsWithinToleranceOnTheModelMachine) {
   // to 4 decimals (0.05 um a coordinate).
   EXPECT_LE(r.after.max_um, direct.after.max_um + table_um + 0.09) << "table error " << table_um << " um";
   EXPECT_NEAR(r.after.rms_um, direct.after.rms_um, table_um + 0.05);
+  // The plain-line shortcut from a table too: the general path's bytes, on
+  // pocket.ngc and on a raster of plain lines; and --keep-arcs, which has no
+  // bounds of a table's field, linearises (the same output as without it).
+  std::string raster = "G21 G90 G17 F800\nG0 X0 Y0 Z5\nG1 Z-1\n";
+  for (int k = 0; k < 400; ++k)
+    raster += fmt::format("X{:.4f} Y{:.4f} Z{:.4f}\n", (k % 40) * 2.5 * ((k / 40) % 2 ? -1 : 1) + 50, (k / 40) * 0.7,
+                          -1 - 0.3 * std::sin(k * 0.1));
+  for (const std::string& text : {program, raster}) {
+    std::string outs[3];
+    for (int k = 0; k < 3; ++k) {
+      post::PostOptions o;
+      o.shortcuts = k != 1;
+      o.keep_arcs = k == 2;
+      std::istringstream i(text);
+      std::ostringstream os;
+      post::post_program(i, "t.ngc", os, m, table, s, o);
+      outs[k] = os.str();
+    }
+    EXPECT_EQ(outs[0], outs[1]);
+    EXPECT_EQ(outs[2], outs[0]);
+  }
 }
 
 TEST(PostTable, AnotherToolOrAnotherMachineIsRefused) {
