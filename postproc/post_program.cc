@@ -298,6 +298,14 @@ class ProgramPost {
     const double d = s.absolute ? v_mm - (g53 ? 0.0 : interp_.work_offset()[a]) : v_mm - emitted_mm_[a];
     return s.unit_mm == 1.0 ? d : d / s.unit_mm;  // x / 1 is x: no division in mm (the same bits)
   }
+  /// Whether axis a needs a new word to command cmd: the number written for
+  /// it would differ, at the output's resolution, from `old_value` (the
+  /// block's own word, program units) or, without one, from where the
+  /// controller stands (G90; no increment under G91).
+  bool axis_needs_word(int a, const Vector3d& cmd, const double* old_value, bool g53) const {
+    const double old = old_value ? *old_value : interp_.state().absolute ? program_value(a, emitted_mm_[a], g53) : 0.0;
+    return std::abs(program_value(a, cmd[a], g53) - old) >= half_unit(decimals());
+  }
   void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, CharBuffer& s) {
     const int dec = decimals();
     const char* letters = lower ? "xyz" : "XYZ";
@@ -799,12 +807,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   // writes (or, for an absent word, with staying put).
   auto needs_word = [&](int a, const Vector3d& cmd) {
     const int idx = axis_index[a];
-    double old_value;
-    if (idx >= 0)
-      old_value = b.words[static_cast<size_t>(idx)].value;
-    else
-      old_value = interp_.state().absolute ? program_value(a, emitted_mm_[a], fx.g53) : 0.0;
-    return std::abs(program_value(a, cmd[a], fx.g53) - old_value) >= half_unit;
+    return axis_needs_word(a, cmd, idx >= 0 ? &b.words[static_cast<size_t>(idx)].value : nullptr, fx.g53);
   };
 
   if (m.kind == nc::MotionKind::kRapid) {
@@ -1151,9 +1154,7 @@ bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Correc
     // resolution, as in segment()), then the arc.
     if (step) {
       bool needed = false;
-      for (int a = 0; a < 3; ++a)
-        needed = needed || std::abs(program_value(a, c0[a], false) - program_value(a, emitted_mm_[a], false)) >=
-                               half_unit(dec);
+      for (int a = 0; a < 3; ++a) needed = needed || axis_needs_word(a, c0, nullptr, false);
       if (needed) {
         CharBuffer& l = expanded_line_;
         l.clear();
@@ -1231,21 +1232,15 @@ bool ProgramPost::plain_line(std::string_view text) {
   ctrl_il_known_ = false;  // the run of cycle blocks has ended
   const Corrector& c = *last_corrector_;
   const std::vector<Piece>& pieces = segment(c, plain_motion_, emitted_mm_);
-  const int dec = decimals();
   if (pieces.size() == 1) {
-    // needs_word of each axis (G90, not G53).
-    const double hu = half_unit(dec);
     bool needed = false;
-    for (int a = 0; a < 3; ++a) {
-      const double old_value =
-          (words.given >> a & 1u) ? words.value[a] : program_value(a, emitted_mm_[a], false);
-      needed = needed || std::abs(program_value(a, pieces[0].command_mm[a], false) - old_value) >= hu;
-    }
-    if (!needed) {  // unchanged(): the line as written, the controller where its words say
+    for (int a = 0; a < 3; ++a)
+      needed = needed || axis_needs_word(a, pieces[0].command_mm, (words.given >> a & 1u) ? &words.value[a] : nullptr,
+                                         false);
+    if (!needed) {  // unchanged(): the line as written, the controller where its words say (the move's end)
       emit(text);
-      const Vector3d& wo = interp_.work_offset();
       for (int a = 0; a < 3; ++a)
-        if (words.given >> a & 1u) emitted_mm_[a] = words.value[a] * st.unit_mm + wo[a];
+        if (words.given >> a & 1u) emitted_mm_[a] = plain_motion_.end_mm[a];
       return true;
     }
   }

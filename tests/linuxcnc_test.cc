@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
 #include "core/errors_csv.h"
@@ -625,19 +626,13 @@ TEST(LinuxCnc, RandomCamProgramsPostedPassThroughTheSamePoints) {
     // circle instead of a sliver): the machine's path, sampled between the
     // points too, keeps the tolerance (1 um, plus the rounding of inch
     // numbers).
-    const std::string json = (dir / "verify.json").string();
-    const std::string verify = test::volmap_binary() + " verify --machine " +
-                               test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
-                               test::source_path("samples/errors/hsu-3axis.csv") +
-                               " --work-offset 250,200,150 --clamp --tool-table " + tbl_mm + " --nominal " + in +
-                               " --program " + out + " --json > " + json;
-    ASSERT_EQ(std::system(verify.c_str()), 0);
-    const std::string report = test::file_bytes(json);
-    const size_t after = report.find("\"after\"");
-    ASSERT_NE(after, std::string::npos) << report;
-    const size_t max_at = report.find("\"max_um\"", after);
-    const double after_um = std::strtod(report.c_str() + report.find(':', max_at) + 1, nullptr);
-    EXPECT_LT(after_um, 1.5) << report;
+    const test::CliResult r = test::run_volmap_in_source(
+        "verify --machine samples/machines/hsu-3axis.json --errors samples/errors/hsu-3axis.csv "
+        "--work-offset 250,200,150 --clamp --tool-table " + tbl_mm + " --nominal " + in + " --program " + out +
+        " --json");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const double after_um = nlohmann::json::parse(r.out)["after"]["max_um"].get<double>();
+    EXPECT_LT(after_um, 1.5) << r.out;
   }
   EXPECT_GT(both, 100);
   EXPECT_GT(kept_arcs, 20);
