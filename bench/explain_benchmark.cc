@@ -6,25 +6,27 @@
 //  - ProbeBall100k: probe-ball test on the X'Y'ZA'C' sample, 35 712 poses x
 //    (ex, ey, ez) = 107 136 readings in 16 runs, with a C wobble; fitted
 //    baseline (57 identifiable parameters).
+#include <benchmark/benchmark.h>
+
 #include <sstream>
 #include <string>
 
-#include <benchmark/benchmark.h>
-
-#include "core/effects.h"
-#include "core/errors_csv.h"
-#include "core/explain.h"
-#include "core/gain_evaluator.h"
-#include "core/machine_json.h"
-#include "core/plan.h"
-#include "core/simulate.h"
+#include "core/explain/explain.h"
+#include "core/measure/effects.h"
+#include "core/measure/plan.h"
+#include "core/measure/simulate.h"
+#include "core/model/errors_csv.h"
+#include "core/model/gain_evaluator.h"
+#include "core/model/machine_json.h"
 
 namespace {
 
-std::string sample(const std::string& rel) { return std::string(VOLMAP_SOURCE_DIR) + "/samples/" + rel; }
+std::string sample(const std::string& rel) {
+  return std::string(VOLMAP_SOURCE_DIR) + "/samples/" + rel;
+}
 
-volmap::Recordings make(const volmap::Machine& m, const std::string& errors, const std::string& plan_json,
-                        const std::string& effects_json) {
+volmap::Recordings make(const volmap::Machine& m, const std::string& errors,
+                        const std::string& plan_json, const std::string& effects_json) {
   const volmap::ErrorModel truth(m, volmap::load_errors_csv(sample(errors)));
   std::istringstream plan_text(plan_json);
   const volmap::Plan plan = volmap::read_plan_json(plan_text, "bench-plan.json", m);
@@ -51,7 +53,8 @@ void run(benchmark::State& state, const volmap::Machine& m, const volmap::Record
 
 void BM_ExplainLaserX100k(benchmark::State& state) {
   const volmap::Machine m = volmap::load_machine_json(sample("machines/hsu-3axis.json"));
-  const volmap::Recordings rec = make(m, "recordings/geometry-3axis.csv",
+  const volmap::Recordings rec = make(
+      m, "recordings/geometry-3axis.csv",
       R"({"seed": 3, "noise_um": 0.5, "tests": [{"type": "laser", "axis": "X", "from": 0, "to": 500,
           "step": 2.5, "bidirectional": true, "cycles": 249, "at": {"Y": 200, "Z": 150}, "record": ["ex"],
           "dwell_s": 1, "move_s": 1}]})",
@@ -64,7 +67,8 @@ BENCHMARK(BM_ExplainLaserX100k)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 void BM_ExplainProbeBall100k(benchmark::State& state) {
   const volmap::Machine m = volmap::load_machine_json(sample("machines/lei-hsu-xyzac.json"));
-  const volmap::Recordings rec = make(m, "recordings/geometry-5axis.csv",
+  const volmap::Recordings rec = make(
+      m, "recordings/geometry-5axis.csv",
       R"({"seed": 4, "noise_um": 0.3, "tests": [{"type": "probe_ball", "centers_mm": [[40, 0, 0], [0, 30, 80]],
           "a_deg": {"from": -90, "to": 0, "step": 3.0}, "c_deg": {"from": 0, "to": 355, "step": 5},
           "cycles": 8, "record": ["ex", "ey", "ez"]}]})",

@@ -7,24 +7,26 @@
 // buffer. Parts: backward alone, backward + correction, formatting alone,
 // and the zero-error path (no model). BM_PostProgram posts a whole TCP
 // program (segmentation with checks between points, G93 feeds) from memory.
+#include <benchmark/benchmark.h>
+
 #include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <benchmark/benchmark.h>
-
-#include "core/errors_csv.h"
-#include "core/machine_json.h"
-#include "postproc/five_axis_post.h"
-#include "postproc/five_axis_transform.h"
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
+#include "postproc/five_axis/five_axis_post.h"
+#include "postproc/five_axis/five_axis_transform.h"
 
 namespace {
 
 using volmap::AxisVector;
 using volmap::ToolPose;
 
-std::string sample(const std::string& rel) { return std::string(VOLMAP_SOURCE_DIR) + "/samples/" + rel; }
+std::string sample(const std::string& rel) {
+  return std::string(VOLMAP_SOURCE_DIR) + "/samples/" + rel;
+}
 
 // A spiral of the tool tip over a dome with the tool axis tilting around
 // (A from about -10 to -60 degrees, C turning): 4096 poses.
@@ -34,7 +36,8 @@ std::vector<ToolPose> path() {
     const double t = i * 0.005, tilt = (10 + 50.0 * i / 4096) * M_PI / 180;
     ToolPose p;
     p.tip_mm = Eigen::Vector3d(40 * std::cos(t), 40 * std::sin(t), 20 + 0.005 * i);
-    p.axis = Eigen::Vector3d(std::sin(tilt) * std::cos(t), std::sin(tilt) * std::sin(t), std::cos(tilt));
+    p.axis =
+        Eigen::Vector3d(std::sin(tilt) * std::cos(t), std::sin(tilt) * std::sin(t), std::cos(tilt));
     v.push_back(p);
   }
   return v;

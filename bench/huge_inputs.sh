@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
-volmap="$build/core/volmap"
+volmap="$build/volmap"
 mb=${VOLMAP_HUGE_MB:-1024}
 spacing=${VOLMAP_HUGE_SPACING:-1.85,1.85,1.85}
 work=$(mktemp -d "${TMPDIR:-/tmp}/volmap-huge.XXXXXX")

@@ -2,20 +2,22 @@
 // sample and 17 component-curve terms) from 10 200 probe-ball observations
 // (30 600 recorded values ex, ey, ez), Gauss-Newton on the exact model.
 // Issue target: < 50 ms on one core.
+#include <benchmark/benchmark.h>
+
 #include <sstream>
 #include <string>
 
-#include <benchmark/benchmark.h>
-
-#include "core/errors_csv.h"
-#include "core/identify.h"
-#include "core/machine_json.h"
-#include "core/plan.h"
-#include "core/simulate.h"
+#include "core/measure/identify.h"
+#include "core/measure/plan.h"
+#include "core/measure/simulate.h"
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
 
 namespace {
 
-std::string sample(const std::string& rel) { return std::string(VOLMAP_SOURCE_DIR) + "/samples/" + rel; }
+std::string sample(const std::string& rel) {
+  return std::string(VOLMAP_SOURCE_DIR) + "/samples/" + rel;
+}
 
 void BM_Identify30From10k(benchmark::State& state) {
   const volmap::Machine m = volmap::load_machine_json(sample("machines/lei-hsu-xyzac.json"));

@@ -4,17 +4,17 @@
 // and the iterated correction, and the B-C table-table sample. The pipeline
 // hands the Jacobian from placing the tip (backward_selected) to correct(),
 // as a post-processor does: one walk over the chains per pose, not two.
+#include <benchmark/benchmark.h>
+
 #include <random>
 #include <string>
 #include <vector>
 
-#include <benchmark/benchmark.h>
-
-#include "core/correction.h"
-#include "core/errors_csv.h"
-#include "core/jacobian.h"
-#include "core/kinematics.h"
-#include "core/machine_json.h"
+#include "core/kinematics/correction.h"
+#include "core/kinematics/jacobian.h"
+#include "core/kinematics/kinematics.h"
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
 
 namespace {
 
@@ -49,13 +49,14 @@ std::vector<Case> cases(const volmap::Machine& m, int n) {
 volmap::ErrorSet errors_for(const std::string& name) {
   if (name == "lei-hsu-xyzac") return volmap::load_errors_csv(sample("errors/lei-hsu-xyzac.csv"));
   volmap::ErrorSet e;  // bc-table-table has no sample errors: location errors only
-  e.location = {{"EX0C", 0.02}, {"EY0C", -0.015}, {"EA0C", 40e-6}, {"EB0C", -30e-6},
-                {"EX0B", 0.025}, {"EZ0B", -0.01}, {"EA0B", 25e-6}, {"EC0B", 50e-6}};
+  e.location = {{"EX0C", 0.02},  {"EY0C", -0.015}, {"EA0C", 40e-6}, {"EB0C", -30e-6},
+                {"EX0B", 0.025}, {"EZ0B", -0.01},  {"EA0B", 25e-6}, {"EC0B", 50e-6}};
   return e;
 }
 
 void BM_BackwardAndCorrection(benchmark::State& state, const char* name) {
-  const volmap::Machine m = volmap::load_machine_json(sample(std::string("machines/") + name + ".json"));
+  const volmap::Machine m =
+      volmap::load_machine_json(sample(std::string("machines/") + name + ".json"));
   const volmap::ErrorModel model(m, errors_for(name));
   const volmap::CorrectionSolver solver(model);
   const volmap::Kinematics& kin = solver.kinematics();

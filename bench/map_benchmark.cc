@@ -4,23 +4,24 @@
 // bidirectional X table, so that is 2 x 101^3 nodes, each with the dv
 // evaluation and the fixed-point correction solve); and a five-axis
 // X'Y'ZA'C' table with the CorrectionSolver correction (BM_Table5AxisXYZAC).
+#include <benchmark/benchmark.h>
+
 #include <atomic>
 #include <thread>
 #include <utility>
 #include <vector>
 
-#include <benchmark/benchmark.h>
-
-#include "core/error_model.h"
-#include "core/errors_csv.h"
-#include "core/machine_json.h"
-#include "maps/table_builder.h"
+#include "core/model/error_model.h"
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
+#include "maps/tables/table_builder.h"
 
 namespace {
 
 const volmap::ErrorModel& hsu() {
   static const volmap::ErrorModel model(
-      volmap::load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/hsu-3axis.json"),
+      volmap::load_machine_json(std::string(VOLMAP_SOURCE_DIR) +
+                                "/samples/machines/hsu-3axis.json"),
       volmap::load_errors_csv(std::string(VOLMAP_SOURCE_DIR) + "/samples/errors/hsu-3axis.csv"));
   return model;
 }
@@ -49,7 +50,11 @@ void BM_ModelEvaluationsThreaded(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * threads * kPerThread);
 }
-BENCHMARK(BM_ModelEvaluationsThreaded)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ModelEvaluationsThreaded)
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Table101(benchmark::State& state) {
   const volmap::ErrorModel& model = hsu();
@@ -64,7 +69,8 @@ void BM_Table101(benchmark::State& state) {
     benchmark::DoNotOptimize(table.values.data());
   }
   state.counters["nodes"] = static_cast<double>(table.node_count() * table.layer_count());
-  state.counters["evals/s"] = benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
+  state.counters["evals/s"] =
+      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Table101)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
@@ -77,9 +83,9 @@ const volmap::ErrorModel& hsu_single_layer() {
         volmap::load_errors_csv(std::string(VOLMAP_SOURCE_DIR) + "/samples/errors/hsu-3axis.csv");
     for (auto& axis : e.axis)
       if (axis) axis->minus = volmap::AxisErrorTable{};
-    return volmap::ErrorModel(
-        volmap::load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/hsu-3axis.json"),
-        std::move(e));
+    return volmap::ErrorModel(volmap::load_machine_json(std::string(VOLMAP_SOURCE_DIR) +
+                                                        "/samples/machines/hsu-3axis.json"),
+                              std::move(e));
   }();
   return model;
 }
@@ -99,8 +105,10 @@ BENCHMARK(BM_Table101SingleLayer)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark
 
 const volmap::ErrorModel& xyzac() {
   static const volmap::ErrorModel model(
-      volmap::load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/lei-hsu-xyzac.json"),
-      volmap::load_errors_csv(std::string(VOLMAP_SOURCE_DIR) + "/samples/errors/lei-hsu-xyzac.csv"));
+      volmap::load_machine_json(std::string(VOLMAP_SOURCE_DIR) +
+                                "/samples/machines/lei-hsu-xyzac.json"),
+      volmap::load_errors_csv(std::string(VOLMAP_SOURCE_DIR) +
+                              "/samples/errors/lei-hsu-xyzac.csv"));
   return model;
 }
 
@@ -124,9 +132,15 @@ void BM_Table5AxisXYZAC(benchmark::State& state) {
   }
   state.counters["nodes"] = static_cast<double>(table.node_count() * table.layer_count());
   state.counters["MiB"] = static_cast<double>(table.size_bytes()) / (1 << 20);
-  state.counters["evals/s"] = benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
+  state.counters["evals/s"] =
+      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_Table5AxisXYZAC)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Table5AxisXYZAC)
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 }  // namespace
 

@@ -1,15 +1,15 @@
 // The exact five-axis model at one axis position, every component error
 // interpolated (issue target: <= 200 ns on one core), and the three-axis
 // model and the first-order form beside it.
+#include <benchmark/benchmark.h>
+
 #include <array>
 #include <random>
 #include <vector>
 
-#include <benchmark/benchmark.h>
-
-#include "core/error_model.h"
-#include "core/errors_csv.h"
-#include "core/machine_json.h"
+#include "core/model/error_model.h"
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
 
 namespace {
 
@@ -34,8 +34,10 @@ std::vector<volmap::AxisVector> poses(const volmap::Machine& m, int n) {
 
 template <bool kExact>
 void BM_Model(benchmark::State& state, const char* name) {
-  const volmap::Machine m = volmap::load_machine_json(sample(std::string("machines/") + name + ".json"));
-  const volmap::ErrorModel model(m, volmap::load_errors_csv(sample(std::string("errors/") + name + ".csv")));
+  const volmap::Machine m =
+      volmap::load_machine_json(sample(std::string("machines/") + name + ".json"));
+  const volmap::ErrorModel model(
+      m, volmap::load_errors_csv(sample(std::string("errors/") + name + ".csv")));
   const auto us = poses(m, 1024);
   size_t k = 0;
   for (auto _ : state) {
@@ -56,8 +58,10 @@ BENCHMARK_CAPTURE(BM_FirstOrderModel, five_axis, "lei-hsu-xyzac");
 // all-linear machine, once per NC line, positions inside the travel and
 // approach directions varying (+1, -1, 0) as along a program.
 void BM_TipErrorLinear(benchmark::State& state, const char* name) {
-  const volmap::Machine m = volmap::load_machine_json(sample(std::string("machines/") + name + ".json"));
-  const volmap::ErrorModel model(m, volmap::load_errors_csv(sample(std::string("errors/") + name + ".csv")));
+  const volmap::Machine m =
+      volmap::load_machine_json(sample(std::string("machines/") + name + ".json"));
+  const volmap::ErrorModel model(
+      m, volmap::load_errors_csv(sample(std::string("errors/") + name + ".csv")));
   const auto us = poses(m, 1024);
   std::mt19937 rng(2);
   std::uniform_int_distribution<int> die(-1, 1);

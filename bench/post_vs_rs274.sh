@@ -1,7 +1,7 @@
 #!/bin/sh
 # volmap post vs LinuxCNC's rs274 -g on the same N-line three-axis raster
 # program (issue #5's performance target: volmap post >= 20x faster).
-# Usage: bench/post_vs_rs274.sh [N=1000000] [VOLMAP=build/core/volmap]
+# Usage: bench/post_vs_rs274.sh [N=1000000] [VOLMAP=build/volmap]
 # Prints user+sys times, the ratio and peak memory (max RSS) of both, and the
 # load average (the machine may be shared: compare with care).
 # BIG=1 also streams a 1 GB program (38 M lines, generated on the fly, never
@@ -9,7 +9,7 @@
 set -eu
 N=${1:-1000000}
 here=$(cd "$(dirname "$0")/.." && pwd)
-VOLMAP=${2:-$here/build/core/volmap}
+VOLMAP=${2:-$here/build/volmap}
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 gen() {  # N [WRAP]: the raster program of the issue (28 bytes a line); y back to 0 past WRAP mm

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "core/input_error.h"
+#include "core/common/input_error.h"
 
 namespace volmap::nc {
 namespace {
@@ -27,7 +27,8 @@ constexpr bool is_word_letter(char upper) {
 enum CharClass : std::uint8_t { kOther = 0, kSpace, kDigit };
 struct CharTable {
   std::array<std::uint8_t, 256> cls{};
-  std::array<char, 256> upper{};  ///< the word letter a character begins (ASCII toupper), or 0 (and for O)
+  std::array<char, 256>
+      upper{};  ///< the word letter a character begins (ASCII toupper), or 0 (and for O)
 };
 constexpr CharTable make_char_table() {
   CharTable t;
@@ -49,13 +50,14 @@ bool is_space(char c) { return kChars.cls[static_cast<unsigned char>(c)] == kSpa
 constexpr const char* kNoParameters =
     "# parameters are not supported: the post-processor needs literal numbers; "
     "expand parameters in CAM (or with LinuxCNC's interpreter) first";
-constexpr const char* kNoExpressions = "[ ] expressions are not supported; output literal numbers from CAM";
+constexpr const char* kNoExpressions =
+    "[ ] expressions are not supported; output literal numbers from CAM";
 
 constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
                              1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
 struct GeneralNumber {
-  size_t end = 0;  ///< where the word ends (after its last number character)
+  size_t end = 0;           ///< where the word ends (after its last number character)
   std::string_view number;  ///< its characters (into `spaced` when spaces were inside)
   std::uint64_t mantissa = 0;
   int significant = 0, decimals = 0;
@@ -65,8 +67,8 @@ struct GeneralNumber {
 // The number of a word in every form RS274NGC allows: sign, digits, point,
 // with spaces allowed between its characters (collected into `spaced` only
 // when there are such spaces). `i` is just after the letter.
-GeneralNumber read_number_general(std::string_view text, int line, const std::string& file, size_t i,
-                                  std::string& spaced) {
+GeneralNumber read_number_general(std::string_view text, int line, const std::string& file,
+                                  size_t i, std::string& spaced) {
   const size_t n = text.size();
   {
     size_t k = i;
@@ -94,10 +96,11 @@ GeneralNumber read_number_general(std::string_view text, int line, const std::st
       } else {
         if (seen_point) ++g.decimals;
         if (g.mantissa != 0 || d != '0') ++g.significant;
-        g.mantissa = g.mantissa * 10 + static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
+        g.mantissa = g.mantissa * 10 +
+                     static_cast<std::uint64_t>(d - '0');  // wraps harmlessly past 19 digits
       }
       if (last == first_char) {
-        first_char = i;  // spaces before the number: it starts here
+        first_char = i;                      // spaces before the number: it starts here
       } else if (contiguous && i != last) {  // spaces inside the number: collect it
         contiguous = false;
         spaced.assign(text.substr(first_char, last - first_char));
@@ -145,7 +148,8 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     ++i;
     skip_space();
     if (i < n && t[i] != ';' && t[i] != '(')
-      fail(file, line, i, "text after '%' on the program delimiter line; put it on a line of its own");
+      fail(file, line, i,
+           "text after '%' on the program delimiter line; put it on a line of its own");
     return;
   }
   if (i < n && t[i] == '/') {
@@ -178,7 +182,8 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
         fail(file, line, i,
              "O-word control flow (subroutines, loops, conditionals) is not supported; "
              "expand it in CAM to a flat program");
-      fail(file, line, i, std::string("unexpected character '") + static_cast<char>(c) + "'; not a G-code word");
+      fail(file, line, i,
+           std::string("unexpected character '") + static_cast<char>(c) + "'; not a G-code word");
     }
     Word& w = b.words.emplace_back();  // (on InputError the block is as far as it got)
     w.letter = letter;
@@ -222,7 +227,7 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
     // (at most 15 digits say so at once).
     bool exact = digits <= 15 || (digits <= 19 && mantissa < 1000000000000000ull);
     std::string_view number;  // needed only when std::from_chars reads it
-    size_t end;  // of the word
+    size_t end;               // of the word
     if (fast) {
       number = std::string_view(t + i, k - i);
       end = k;
@@ -260,7 +265,8 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
       const double r = std::round(scaled);
       // Codes beyond G/M 99999 do not exist; a longer number stays -1 (an
       // unknown code, refused by the interpreter) instead of overflowing int.
-      if (std::abs(scaled - r) < 1e-6 && decimals <= 1 && v >= 0 && r < 1e6) w.code10 = static_cast<int>(r);
+      if (std::abs(scaled - r) < 1e-6 && decimals <= 1 && v >= 0 && r < 1e6)
+        w.code10 = static_cast<int>(r);
     }
   }
 }

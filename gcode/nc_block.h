@@ -17,20 +17,20 @@
 namespace volmap::nc {
 
 struct Word {
-  char letter = 0;       ///< upper case; '@' and '^' for polar radius and angle
-  double value = 0.0;    ///< as written (program units)
-  int code10 = -1;       ///< G/M: value x 10 when it has at most one decimal, else -1
+  char letter = 0;                   ///< upper case; '@' and '^' for polar radius and angle
+  double value = 0.0;                ///< as written (program units)
+  int code10 = -1;                   ///< G/M: value x 10 when it has at most one decimal, else -1
   std::uint32_t begin = 0, end = 0;  ///< byte span [begin, end) in Block::text
-  int decimals = 0;      ///< digits after the decimal point as written
+  int decimals = 0;                  ///< digits after the decimal point as written
 };
 
 struct Block {
-  std::string text;          ///< the raw line, without its line ending
-  int line = 0;              ///< 1-based physical line number
-  bool block_delete = false; ///< starts with '/'
-  bool percent = false;      ///< a '%' program delimiter line
-  std::vector<Word> words;   ///< in order of appearance, N words included
-  std::string comment;       ///< text of the first ( ) comment (for MSG)
+  std::string text;           ///< the raw line, without its line ending
+  int line = 0;               ///< 1-based physical line number
+  bool block_delete = false;  ///< starts with '/'
+  bool percent = false;       ///< a '%' program delimiter line
+  std::vector<Word> words;    ///< in order of appearance, N words included
+  std::string comment;        ///< text of the first ( ) comment (for MSG)
 
   const Word* find(char letter) const {
     for (const Word& w : words)

@@ -1,74 +1,162 @@
 #include "gcode/nc_interpreter.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <optional>
 #include <sstream>
 
-#include <fmt/format.h>
-
-#include "core/input_error.h"
+#include "core/common/input_error.h"
 
 namespace volmap::nc {
 namespace {
 
 // Bounds of integer words (beyond them a number would overflow int, or a
 // helix would need more pieces than memory holds).
-constexpr double kMaxToolNumber = 99999;  // T, H and tool table numbers
-constexpr double kMaxArcTurns = 1000;     // P of G2/G3
+constexpr double kMaxToolNumber = 99999;    // T, H and tool table numbers
+constexpr double kMaxArcTurns = 1000;       // P of G2/G3
 constexpr double kMaxCycleRepeats = 10000;  // L of canned cycles
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 // Modal groups of G codes (code x 10), RS274NGC / LinuxCNC numbering.
-enum GGroup { kNonModal = 0, kMotion = 1, kPlane = 2, kDistance = 3, kArcDistance = 4,
-              kFeedMode = 5, kUnits = 6, kCutterComp = 7, kToolLength = 8, kReturnMode = 10,
-              kCoordSystem = 12, kPathControl = 13, kSpindleMode = 14, kGroupCount = 16 };
+enum GGroup {
+  kNonModal = 0,
+  kMotion = 1,
+  kPlane = 2,
+  kDistance = 3,
+  kArcDistance = 4,
+  kFeedMode = 5,
+  kUnits = 6,
+  kCutterComp = 7,
+  kToolLength = 8,
+  kReturnMode = 10,
+  kCoordSystem = 12,
+  kPathControl = 13,
+  kSpindleMode = 14,
+  kGroupCount = 16
+};
 
 // Returns the group of a supported G code, or -1 with `why` set for one
 // volmap refuses.
 int g_group(int code10, const char** why) {
   switch (code10) {
-    case 0: case 10: case 20: case 30: case 730: case 800: case 810: case 820: case 830:
-    case 850: case 860: case 890:
+    case 0:
+    case 10:
+    case 20:
+    case 30:
+    case 730:
+    case 800:
+    case 810:
+    case 820:
+    case 830:
+    case 850:
+    case 860:
+    case 890:
       return kMotion;
-    case 170: case 180: case 190: return kPlane;
-    case 900: case 910: return kDistance;
-    case 901: case 911: return kArcDistance;
-    case 930: case 940: case 950: return kFeedMode;
-    case 200: case 210: return kUnits;
-    case 400: return kCutterComp;
-    case 430: case 431: case 490: return kToolLength;
-    case 980: case 990: return kReturnMode;
-    case 540: case 550: case 560: case 570: case 580: case 590: case 591: case 592: case 593:
+    case 170:
+    case 180:
+    case 190:
+      return kPlane;
+    case 900:
+    case 910:
+      return kDistance;
+    case 901:
+    case 911:
+      return kArcDistance;
+    case 930:
+    case 940:
+    case 950:
+      return kFeedMode;
+    case 200:
+    case 210:
+      return kUnits;
+    case 400:
+      return kCutterComp;
+    case 430:
+    case 431:
+    case 490:
+      return kToolLength;
+    case 980:
+    case 990:
+      return kReturnMode;
+    case 540:
+    case 550:
+    case 560:
+    case 570:
+    case 580:
+    case 590:
+    case 591:
+    case 592:
+    case 593:
       return kCoordSystem;
-    case 610: case 611: case 640: return kPathControl;
-    case 960: case 970: return kSpindleMode;
-    case 40: case 530: return kNonModal;
-    case 410: case 420: case 411: case 421:
-      *why = "cutter radius compensation (G41/G42) is not supported: the post-processor "
-             "needs the tool centre path; output it from CAM with G40";
+    case 610:
+    case 611:
+    case 640:
+      return kPathControl;
+    case 960:
+    case 970:
+      return kSpindleMode;
+    case 40:
+    case 530:
+      return kNonModal;
+    case 410:
+    case 420:
+    case 411:
+    case 421:
+      *why =
+          "cutter radius compensation (G41/G42) is not supported: the post-processor "
+          "needs the tool centre path; output it from CAM with G40";
       return -1;
-    case 280: case 281: case 300: case 301:
-      *why = "G28/G30 move to stored positions the program does not state; replace them "
-             "with explicit G53 moves";
+    case 280:
+    case 281:
+    case 300:
+    case 301:
+      *why =
+          "G28/G30 move to stored positions the program does not state; replace them "
+          "with explicit G53 moves";
       return -1;
-    case 920: case 921: case 922: case 923: case 520:
-      *why = "G92/G52 coordinate offsets are not supported; use G54-G59.3 work offsets "
-             "(--work-offset or --var-file)";
+    case 920:
+    case 921:
+    case 922:
+    case 923:
+    case 520:
+      *why =
+          "G92/G52 coordinate offsets are not supported; use G54-G59.3 work offsets "
+          "(--work-offset or --var-file)";
       return -1;
     case 100:
-      *why = "G10 (setting offsets or tools from the program) is not supported; give them "
-             "with --var-file / --tool-table";
+      *why =
+          "G10 (setting offsets or tools from the program) is not supported; give them "
+          "with --var-file / --tool-table";
       return -1;
-    case 382: case 383: case 384: case 385:
+    case 382:
+    case 383:
+    case 384:
+    case 385:
       *why = "probing moves (G38.x) cannot be compensated; run them uncompensated";
       return -1;
-    case 330: case 331: case 760: case 840: case 740: case 870: case 880:
-      *why = "threading and tapping cycles (G33, G76, G84, G74) and G87/G88 are not "
-             "supported; compensation would break spindle synchronisation";
+    case 330:
+    case 331:
+    case 760:
+    case 840:
+    case 740:
+    case 870:
+    case 880:
+      *why =
+          "threading and tapping cycles (G33, G76, G84, G74) and G87/G88 are not "
+          "supported; compensation would break spindle synchronisation";
       return -1;
-    case 50: case 51: case 52: case 70: case 80: case 150: case 160: case 680: case 690:
+    case 50:
+    case 51:
+    case 52:
+    case 70:
+    case 80:
+    case 150:
+    case 160:
+    case 680:
+    case 690:
       *why = "splines, lathe diameter mode, polar and rotated coordinates are not supported";
       return -1;
     default:
@@ -77,8 +165,15 @@ int g_group(int code10, const char** why) {
   }
 }
 
-enum MGroup { kMStop = 0, kMTool = 1, kMSpindle = 2, kMCoolant = 3, kMOverride = 4, kMOther = 5,
-              kMGroupCount = 6 };
+enum MGroup {
+  kMStop = 0,
+  kMTool = 1,
+  kMSpindle = 2,
+  kMCoolant = 3,
+  kMOverride = 4,
+  kMOther = 5,
+  kMGroupCount = 6
+};
 
 int m_group(int code10, const char** why) {
   if (code10 % 10 != 0) {
@@ -87,12 +182,32 @@ int m_group(int code10, const char** why) {
   }
   const int m = code10 / 10;
   switch (m) {
-    case 0: case 1: case 2: case 30: case 60: return kMStop;
-    case 6: return kMTool;
-    case 3: case 4: case 5: case 19: return kMSpindle;
-    case 7: case 8: case 9: return kMCoolant;
-    case 48: case 49: case 50: case 51: case 52: case 53: return kMOverride;
-    case 98: case 99:
+    case 0:
+    case 1:
+    case 2:
+    case 30:
+    case 60:
+      return kMStop;
+    case 6:
+      return kMTool;
+    case 3:
+    case 4:
+    case 5:
+    case 19:
+      return kMSpindle;
+    case 7:
+    case 8:
+    case 9:
+      return kMCoolant;
+    case 48:
+    case 49:
+    case 50:
+    case 51:
+    case 52:
+    case 53:
+      return kMOverride;
+    case 98:
+    case 99:
       *why = "M98/M99 subroutine calls are not supported; expand them in CAM";
       return -1;
     default:
@@ -108,13 +223,12 @@ int m_group(int code10, const char** why) {
 constexpr std::array<bool, 256> kPlainLetter = [] {
   std::array<bool, 256> t{};
   for (char c = 'A'; c <= 'Z'; ++c) t[static_cast<unsigned char>(c)] = true;
-  for (char c : {'G', 'M', 'N', 'A', 'B', 'C', 'U', 'V', 'W', 'D', 'E'}) t[static_cast<unsigned char>(c)] = false;
+  for (char c : {'G', 'M', 'N', 'A', 'B', 'C', 'U', 'V', 'W', 'D', 'E'})
+    t[static_cast<unsigned char>(c)] = false;
   return t;
 }();
 
-bool is_cycle(int motion) {
-  return motion == 730 || (motion >= 810 && motion <= 890);
-}
+bool is_cycle(int motion) { return motion == 730 || (motion >= 810 && motion <= 890); }
 
 }  // namespace
 
@@ -155,8 +269,8 @@ void Interpreter::straight_move(const double (&value)[3], unsigned given, Motion
 bool Interpreter::execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion) {
   // execute()'s short path, less what cannot fail here: no F word, no
   // other letter, the position known, G1 with a feed rate.
-  if (s_.ended || s_.motion != 10 || !s_.position_known || (s_.feed <= 0.0 && s_.feed_mode != 930) ||
-      given == 0 || given > 7)
+  if (s_.ended || s_.motion != 10 || !s_.position_known ||
+      (s_.feed <= 0.0 && s_.feed_mode != 930) || given == 0 || given > 7)
     return false;
   straight_move(value, given, motion);
   return true;
@@ -191,7 +305,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     // Most words are plain letters (X Y Z F ...): one test sends them on.
     if (kPlainLetter[static_cast<unsigned char>(w.letter)]) {
       const size_t L = static_cast<size_t>(w.letter - 'A');
-      if (letter_mask & (1u << L)) fail(b, &w, fmt::format("word {} appears twice in one block", w.letter));
+      if (letter_mask & (1u << L))
+        fail(b, &w, fmt::format("word {} appears twice in one block", w.letter));
       letter[L] = &w;
       letter_mask |= 1u << L;
       continue;
@@ -200,10 +315,13 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       const char* why = nullptr;
       const int grp = w.code10 < 0 ? -1 : g_group(w.code10, &why);
       if (grp < 0)
-        fail(b, &w, fmt::format("G{} is not supported: {}", b.text.substr(w.begin + 1, w.end - w.begin - 1),
-                                why ? why : "unknown G code"));
+        fail(
+            b, &w,
+            fmt::format("G{} is not supported: {}", b.text.substr(w.begin + 1, w.end - w.begin - 1),
+                        why ? why : "unknown G code"));
       if (g_mask & (1u << grp))
-        fail(b, &w, "two G codes of the same modal group in one block; put them in separate blocks");
+        fail(b, &w,
+             "two G codes of the same modal group in one block; put them in separate blocks");
       // (A second non-modal code failed just above: the group's bit was set.)
       if (grp == kNonModal && (g_mask & (1u << kNonModal)) && g[kNonModal]->code10 != w.code10)
         fail(b, &w, "two non-modal G codes in one block; split the block");
@@ -214,7 +332,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     if (w.letter == 'M') {
       const char* why = nullptr;
       const int grp = w.code10 < 0 ? -1 : m_group(w.code10, &why);
-      if (grp < 0) fail(b, &w, fmt::format("M code is not supported: {}", why ? why : "unknown M code"));
+      if (grp < 0)
+        fail(b, &w, fmt::format("M code is not supported: {}", why ? why : "unknown M code"));
       if (grp != kMOther && (m_mask & (1u << grp)))
         fail(b, &w, "two M codes of the same modal group in one block; split the block");
       m_mask |= 1u << grp;
@@ -229,8 +348,10 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     }
     const char L = w.letter;
     if (L == 'A' || L == 'B' || L == 'C' || L == 'U' || L == 'V' || L == 'W')
-      fail(b, &w, fmt::format("axis word {} is not supported by the three-axis post-processor; "
-                              "use a five-axis machine definition", L));
+      fail(b, &w,
+           fmt::format("axis word {} is not supported by the three-axis post-processor; "
+                       "use a five-axis machine definition",
+                       L));
     if (L == 'D' || L == 'E')
       fail(b, &w, fmt::format("word {} is not supported (cutter compensation, lathe)", L));
     if (L != 'N' && (letter_mask & (1u << (L - 'A'))))
@@ -276,11 +397,14 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       }
     bool known_after = true;
     for (int a = 0; a < 3; ++a)
-      known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] || ((given >> a & 1u) && s_.absolute));
+      known_after = known_after &&
+                    (s_.axis_known[static_cast<size_t>(a)] || ((given >> a & 1u) && s_.absolute));
     if (!known_after && s_.motion != 0)
-      fail(b, nullptr, "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
-                       "before the first cutting move, or give --initial-position");
-    if (s_.motion == 10 && s_.feed <= 0.0 && s_.feed_mode != 930) fail(b, nullptr, "G1 with no feed rate; add an F word");
+      fail(b, nullptr,
+           "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
+           "before the first cutting move, or give --initial-position");
+    if (s_.motion == 10 && s_.feed <= 0.0 && s_.feed_mode != 930)
+      fail(b, nullptr, "G1 with no feed rate; add an F word");
     straight_move(value, given, effect.motion);
     effect.has_motion = true;
     return;
@@ -323,12 +447,16 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     } else if (c == 430) {
       const Word* h = word('H');
       if (h && (h->value < 0 || h->value != std::floor(h->value) || h->value > kMaxToolNumber))
-        fail(b, h, fmt::format("H must be a non-negative integer up to {} (a tool number)", kMaxToolNumber));
+        fail(b, h,
+             fmt::format("H must be a non-negative integer up to {} (a tool number)",
+                         kMaxToolNumber));
       const int tool = h ? static_cast<int>(h->value) : s_.tool;
       auto it = setup_.tool_length_mm.find(tool);
       if (it == setup_.tool_length_mm.end())
-        fail(b, g[kToolLength], fmt::format("G43 uses tool {}, which the tool table does not list; "
-                                            "give its offset with --tool-table", tool));
+        fail(b, g[kToolLength],
+             fmt::format("G43 uses tool {}, which the tool table does not list; "
+                         "give its offset with --tool-table",
+                         tool));
       s_.tool_length_active = true;
       s_.tool_length_mm = it->second;
     } else {  // G43.1: dynamic length from the Z word
@@ -338,7 +466,11 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       s_.tool_length_mm = z->value * s_.unit_mm;
       consumed_axes = true;
       if (word('X') || word('Y') || polar)
-        fail(b, word('X') ? word('X') : word('Y') ? word('Y') : polar_radius ? polar_radius : polar_angle,
+        fail(b,
+             word('X')      ? word('X')
+             : word('Y')    ? word('Y')
+             : polar_radius ? polar_radius
+                            : polar_angle,
              "G43.1 takes only Z here");
     }
     // LinuxCNC: the axes stay, the controlled point (the tip of the tool
@@ -358,7 +490,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   const bool g53 = g[kNonModal] && g[kNonModal]->code10 == 530;
   effect.g53 = g53;
   if (g53 && !s_.absolute) fail(b, g[kNonModal], "G53 needs absolute mode (G90)");
-  if (g53 && polar) fail(b, polar_radius ? polar_radius : polar_angle, "polar coordinates (@ ^) with G53; use X and Y");
+  if (g53 && polar)
+    fail(b, polar_radius ? polar_radius : polar_angle,
+         "polar coordinates (@ ^) with G53; use X and Y");
 
   // LinuxCNC asks for Z, R, P and Q only when the block starts a cycle other
   // than the modal one (a G81 restated in G81 keeps the modal values).
@@ -372,23 +506,33 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
   static constexpr char kOffsetLetters[3][2] = {{'I', 'J'}, {'K', 'I'}, {'J', 'K'}};
   const int arc_plane = g[kPlane] ? (g[kPlane]->code10 - 170) / 10 : s_.plane;
   const int arc_mode = g[kMotion] ? g[kMotion]->code10 : s_.motion;
-  const bool full_circle = !any_axis && (arc_mode == 20 || arc_mode == 30) &&
-                           (word(kOffsetLetters[arc_plane][0]) || word(kOffsetLetters[arc_plane][1]));
-  const bool motion_here = (any_axis && !consumed_axes) || full_circle ||
-                           (g[kMotion] && is_cycle(g[kMotion]->code10));
+  const bool full_circle =
+      !any_axis && (arc_mode == 20 || arc_mode == 30) &&
+      (word(kOffsetLetters[arc_plane][0]) || word(kOffsetLetters[arc_plane][1]));
+  const bool motion_here =
+      (any_axis && !consumed_axes) || full_circle || (g[kMotion] && is_cycle(g[kMotion]->code10));
   if (motion_here && g[kMotion] && g[kMotion]->code10 == 800)
     fail(b, g[kMotion], "axis words with G80; remove them or use G0/G1");
   if (g53 && motion_here && s_.motion != 0 && s_.motion != 10)
     fail(b, g[kNonModal], "G53 works with G0 or G1 only");
   if (motion_here && s_.motion == 800 && !g[kMotion])
-    fail(b, any_axis ? (word('X') ? word('X') : word('Y') ? word('Y') : word('Z')) : nullptr,
+    fail(b,
+         any_axis ? (word('X')   ? word('X')
+                     : word('Y') ? word('Y')
+                                 : word('Z'))
+                  : nullptr,
          "axis words without a motion mode (G80 active); add G0 or G1");
   if (!motion_here && (word('I') || word('J') || word('K') || word('R')) && !is_cycle(s_.motion))
-    fail(b, word('I') ? word('I') : word('J') ? word('J') : word('K') ? word('K') : word('R'),
+    fail(b,
+         word('I')   ? word('I')
+         : word('J') ? word('J')
+         : word('K') ? word('K')
+                     : word('R'),
          "arc words without axis words");
   if (g[kMotion] && (g[kMotion]->code10 == 20 || g[kMotion]->code10 == 30) && !motion_here)
-    fail(b, g[kMotion], "G2/G3 with neither axis words nor a centre (I J K) or R; LinuxCNC refuses it: "
-                        "give the arc's end and centre, or select the mode in the block of the first arc");
+    fail(b, g[kMotion],
+         "G2/G3 with neither axis words nor a centre (I J K) or R; LinuxCNC refuses it: "
+         "give the arc's end and centre, or select the mode in the block of the first arc");
   // A word no code of the block uses: LinuxCNC refuses the block
   // (interp_check.cc, check_other_codes, against the motion the block will
   // make), so a program that has one is not a LinuxCNC program, and its
@@ -410,13 +554,16 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     const bool g64 = g[kPathControl] && g[kPathControl]->code10 == 640;
     const auto unused = [&](char L, bool used, const char* users) {
       if (const Word* w = word(L); w && !used)
-        fail(b, w, fmt::format("{} word with no {} to use it; LinuxCNC refuses the block: remove it", L, users));
+        fail(b, w,
+             fmt::format("{} word with no {} to use it; LinuxCNC refuses the block: remove it", L,
+                         users));
     };
     if (!m_reads_words) {
       for (char L : {'I', 'J', 'K'}) unused(L, arc, "G2 or G3");
       unused('R', arc || cycle, "G2, G3 or canned cycle");
       unused('L', cycle, "canned cycle");
-      unused('P', g4 || g64 || arc || motion_to_be == 820 || motion_to_be == 860 || motion_to_be == 890,
+      unused('P',
+             g4 || g64 || arc || motion_to_be == 820 || motion_to_be == 860 || motion_to_be == 890,
              "G2, G3, G4, G64, G82, G86 or G89");
       unused('Q', g64 || motion_to_be == 730 || motion_to_be == 830, "G64, G73 or G83");
     }
@@ -438,7 +585,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
     // Program coordinates (XY plane, program units) of where the tool
     // stands: polar coordinates and canned-cycle increments start there.
     const double unit = s_.unit_mm;
-    const double at_x = (s_.position_mm.x() - wo.x()) / unit, at_y = (s_.position_mm.y() - wo.y()) / unit;
+    const double at_x = (s_.position_mm.x() - wo.x()) / unit,
+                 at_y = (s_.position_mm.y() - wo.y()) / unit;
     const bool xy_known = s_.axis_known[0] && s_.axis_known[1];
     if (polar && !is_cycle(s_.motion)) {
       // LinuxCNC (interp_find.cc, find_ends). G90: @ and ^ from the program
@@ -447,7 +595,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       const Word* w = polar_radius ? polar_radius : polar_angle;
       const bool needs_current = !s_.absolute || !polar_radius || !polar_angle;
       if (needs_current && !xy_known)
-        fail(b, w, "polar coordinates from an unknown position: command X and Y first (or give --initial-position)");
+        fail(b, w,
+             "polar coordinates from an unknown position: command X and Y first (or give "
+             "--initial-position)");
       double px = at_x, py = at_y;
       if (s_.absolute) {
         if (polar_radius && !polar_angle && px == 0 && py == 0)
@@ -458,14 +608,18 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         py = radius * std::sin(theta);
       } else {
         if (px == 0 && py == 0)
-          fail(b, w, "incremental polar coordinates (G91) at the program origin are indeterminate; move off it first");
+          fail(b, w,
+               "incremental polar coordinates (G91) at the program origin are indeterminate; move "
+               "off it first");
         if (polar_radius) {
-          const double theta = std::atan2(py, px), radius = std::hypot(py, px) + polar_radius->value;
+          const double theta = std::atan2(py, px),
+                       radius = std::hypot(py, px) + polar_radius->value;
           px = radius * std::cos(theta);
           py = radius * std::sin(theta);
         }
         if (polar_angle) {
-          const double theta = std::atan2(py, px) + polar_angle->value * kDegToRad, radius = std::hypot(py, px);
+          const double theta = std::atan2(py, px) + polar_angle->value * kDegToRad,
+                       radius = std::hypot(py, px);
           px = radius * std::cos(theta);
           py = radius * std::sin(theta);
         }
@@ -483,8 +637,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] ||
                                     (given[static_cast<size_t>(a)] && s_.absolute));
     if (!known_after && mode != 0)
-      fail(b, nullptr, "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
-                       "before the first cutting move, or give --initial-position");
+      fail(b, nullptr,
+           "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
+           "before the first cutting move, or give --initial-position");
     if (mode == 0 || mode == 10) {
       mo.kind = mode == 0 ? MotionKind::kRapid : MotionKind::kLinear;
       if (mode == 10 && s_.feed <= 0.0 && s_.feed_mode != 930)
@@ -502,8 +657,9 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       static constexpr char kNormalOffset[3] = {'K', 'J', 'I'};
       static constexpr const char* kPlaneName[3] = {"XY (G17)", "XZ (G18)", "YZ (G19)"};
       if (const Word* w = word(kNormalOffset[p]); w && !word('R'))
-        fail(b, w, fmt::format("{} word given for an arc in the {} plane; LinuxCNC refuses it: remove it",
-                               kNormalOffset[p], kPlaneName[p]));
+        fail(b, w,
+             fmt::format("{} word given for an arc in the {} plane; LinuxCNC refuses it: remove it",
+                         kNormalOffset[p], kPlaneName[p]));
       if (const Word* r = word('R'); r && (word('I') || word('J') || word('K')))
         fail(b, r, "arc with both R and I/J/K; use one form");
       if (!given[static_cast<size_t>(a0)] && !given[static_cast<size_t>(a1)] && !word('R') &&
@@ -521,7 +677,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         const double R = r->value * s_.unit_mm;
         const Eigen::Vector2d d = e2 - s2;
         const double half = d.norm() / 2.0;
-        if (half == 0.0) fail(b, r, "R-form arc with the end point at the start: a full circle needs I/J/K");
+        if (half == 0.0)
+          fail(b, r, "R-form arc with the end point at the start: a full circle needs I/J/K");
         // LinuxCNC (arc_data_r): R may fall short of half the chord by
         // RADIUS_TOLERANCE (0.00005 inch, in program units).
         if ((half - std::abs(R)) / s_.unit_mm > (s_.unit_mm > 1.0 ? 0.00005 : 0.00005 * 25.4))
@@ -535,12 +692,14 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       } else {
         const Word* i0 = word(kOff0[p]);
         const Word* i1 = word(kOff1[p]);
-        if (!i0 && !i1) fail(b, nullptr, fmt::format("arc needs {} or {} (centre) or R", kOff0[p], kOff1[p]));
+        if (!i0 && !i1)
+          fail(b, nullptr, fmt::format("arc needs {} or {} (centre) or R", kOff0[p], kOff1[p]));
         if (s_.arc_absolute) {
           c2 = Eigen::Vector2d((i0 ? i0->value * s_.unit_mm + wo[a0] : mo.start_mm[a0]),
                                (i1 ? i1->value * s_.unit_mm + wo[a1] : mo.start_mm[a1]));
         } else {
-          c2 = s2 + Eigen::Vector2d(i0 ? i0->value * s_.unit_mm : 0.0, i1 ? i1->value * s_.unit_mm : 0.0);
+          c2 = s2 + Eigen::Vector2d(i0 ? i0->value * s_.unit_mm : 0.0,
+                                    i1 ? i1->value * s_.unit_mm : 0.0);
         }
         const double r_start = (s2 - c2).norm(), r_end = (e2 - c2).norm();
         // LinuxCNC's rule (interp_arc.cc arc_data_ijk, in program units):
@@ -556,9 +715,11 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         if (r1 < zero_radius || r2 < zero_radius) fail(b, i0 ? i0 : i1, "arc of zero radius");
         const double abs_err = std::abs(r1 - r2), rel_err = abs_err / std::max(r1, r2);
         if (abs_err > spiral_abs * 100.0 || (rel_err > 0.001 && abs_err > spiral_abs))
-          fail(b, i0 ? i0 : i1, fmt::format("radius to end of arc ({:.4f} mm) differs from radius to start "
-                                            "({:.4f} mm) by more than LinuxCNC allows; fix the centre or the end point",
-                                            r_end, r_start));
+          fail(b, i0 ? i0 : i1,
+               fmt::format(
+                   "radius to end of arc ({:.4f} mm) differs from radius to start "
+                   "({:.4f} mm) by more than LinuxCNC allows; fix the centre or the end point",
+                   r_end, r_start));
       }
       mo.center_mm = mo.start_mm;
       mo.center_mm[a0] = c2.x();
@@ -574,13 +735,18 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         fail(b, nullptr, "canned cycles in the G18 or G19 plane are not supported; use G17");
       const Word* l = word('L');
       if (l && (l->value < 1 || l->value != std::floor(l->value) || l->value > kMaxCycleRepeats))
-        fail(b, l, fmt::format("L (repeats) must be a positive integer up to {}", kMaxCycleRepeats));
+        fail(b, l,
+             fmt::format("L (repeats) must be a positive integer up to {}", kMaxCycleRepeats));
       const int repeats = l ? static_cast<int>(l->value) : 1;
       const bool starts = mode != motion_before;
-      if (const Word* z = word('Z')) s_.cycle_z = z->value;
-      else if (starts) fail(b, g[kMotion], "canned cycle needs a Z word (hole bottom)");
-      if (const Word* r = word('R')) s_.cycle_r = r->value;
-      else if (starts) fail(b, g[kMotion], "canned cycle needs an R word (retract plane)");
+      if (const Word* z = word('Z'))
+        s_.cycle_z = z->value;
+      else if (starts)
+        fail(b, g[kMotion], "canned cycle needs a Z word (hole bottom)");
+      if (const Word* r = word('R'))
+        s_.cycle_r = r->value;
+      else if (starts)
+        fail(b, g[kMotion], "canned cycle needs an R word (retract plane)");
       if ((mode == 830 || mode == 730) && !word('Q') && starts)
         fail(b, g[kMotion], "peck drilling needs a Q word (peck depth)");
       // LinuxCNC (convert_cycle_g73/g83): "Negative or zero q value used".
@@ -591,11 +757,13 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         fail(b, g[kMotion], "dwell cycle needs a P word (seconds)");
       if (mode == 860 && !s_.spindle_turning)
         fail(b, g[kMotion] ? g[kMotion] : nullptr,
-             "G86 with the spindle stopped; LinuxCNC refuses it (\"Spindle not turning in g86\"): start it "
+             "G86 with the spindle stopped; LinuxCNC refuses it (\"Spindle not turning in g86\"): "
+             "start it "
              "with M3 or M4 first");
       // LinuxCNC (convert_cycle) refuses cycles under G93.
       if (s_.feed_mode == 930)
-        fail(b, g[kMotion], "canned cycle under inverse time feed (G93); LinuxCNC refuses it: use G94");
+        fail(b, g[kMotion],
+             "canned cycle under inverse time feed (G93); LinuxCNC refuses it: use G94");
       if (s_.feed <= 0.0) fail(b, nullptr, "canned cycle with no feed rate; add an F word");
       mo.kind = MotionKind::kCycle;
       // LinuxCNC (interp_cycles.cc, convert_cycle_xy). G90: R and Z are
@@ -610,7 +778,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       const double initial = s_.cycle_il_mm;
       const double r_mm = s_.absolute ? s_.cycle_r * unit + wo[2] : initial + s_.cycle_r * unit;
       const double bottom_mm = s_.absolute ? s_.cycle_z * unit + wo[2] : r_mm + s_.cycle_z * unit;
-      if (bottom_mm > r_mm) fail(b, nullptr, "canned cycle with the hole bottom (Z) above the R plane");
+      if (bottom_mm > r_mm)
+        fail(b, nullptr, "canned cycle with the hole bottom (Z) above the R plane");
       double aa = at_x, bb = at_y;
       double aa_step = 0, bb_step = 0, radius_step = 0, angle_step_rad = 0;
       if (s_.absolute) {
@@ -631,7 +800,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
       }
       if (polar && !xy_known)
         fail(b, polar_radius ? polar_radius : polar_angle,
-             "polar coordinates from an unknown position: command X and Y first (or give --initial-position)");
+             "polar coordinates from an unknown position: command X and Y first (or give "
+             "--initial-position)");
       mo.r_mm = r_mm;
       mo.clear_mm = s_.g98 ? std::max(initial, r_mm) : r_mm;
       Eigen::Vector3d at = s_.position_mm;
@@ -640,7 +810,8 @@ void Interpreter::execute(const Block& b, BlockEffect& effect) {
         bb += bb_step;
         if ((radius_step != 0 || angle_step_rad != 0) && aa == 0 && bb == 0)
           fail(b, polar_radius ? polar_radius : polar_angle,
-               "incremental polar coordinates (G91) at the program origin are indeterminate; move off it first");
+               "incremental polar coordinates (G91) at the program origin are indeterminate; move "
+               "off it first");
         if (radius_step != 0) {
           const double theta = std::atan2(bb, aa), radius = std::hypot(bb, aa) + radius_step;
           aa = radius * std::cos(theta);
@@ -721,13 +892,19 @@ void read_tool_table(const std::string& path, ProgramSetup& setup) {
         v = std::stod(tok.substr(1), &used);
         if (used != tok.size() - 1) throw std::invalid_argument("x");
       } catch (const std::exception&) {
-        throw InputError(path, n, fmt::format("bad entry \"{}\"; expected letter and number (T1 P1 Z12.5)", tok));
+        throw InputError(
+            path, n,
+            fmt::format("bad entry \"{}\"; expected letter and number (T1 P1 Z12.5)", tok));
       }
       if (!std::isfinite(v))  // std::stod reads nan and inf
-        throw InputError(path, n, fmt::format("bad entry \"{}\": not a finite number; give the tool length offset in mm", tok));
+        throw InputError(
+            path, n,
+            fmt::format("bad entry \"{}\": not a finite number; give the tool length offset in mm",
+                        tok));
       if (L == 'T' && (v < 0 || v != std::floor(v) || v > kMaxToolNumber))
-        throw InputError(path, n, fmt::format("bad entry \"{}\": a tool number is an integer from 0 to {}",
-                                              tok, kMaxToolNumber));
+        throw InputError(path, n,
+                         fmt::format("bad entry \"{}\": a tool number is an integer from 0 to {}",
+                                     tok, kMaxToolNumber));
       if (L == 'T') tool = static_cast<int>(v);
       if (L == 'Z') z = v;
     }

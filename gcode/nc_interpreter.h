@@ -19,13 +19,12 @@
 // times units plus the active work offset, or the G53 value.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "gcode/nc_block.h"
 
@@ -72,20 +71,20 @@ struct Motion {
 };
 
 struct State {
-  double unit_mm = 1.0;        ///< 25.4 under G20
-  bool absolute = true;        ///< G90
-  bool arc_absolute = false;   ///< G90.1
-  int plane = 0;               ///< 0 XY, 1 ZX, 2 YZ
-  int motion = 0;              ///< G code x 10 of the modal motion (0, 10, 20, 30, 800+)
-  int coord_system = 0;        ///< 0 = G54 .. 8 = G59.3
+  double unit_mm = 1.0;       ///< 25.4 under G20
+  bool absolute = true;       ///< G90
+  bool arc_absolute = false;  ///< G90.1
+  int plane = 0;              ///< 0 XY, 1 ZX, 2 YZ
+  int motion = 0;             ///< G code x 10 of the modal motion (0, 10, 20, 30, 800+)
+  int coord_system = 0;       ///< 0 = G54 .. 8 = G59.3
   bool tool_length_active = false;
   /// The active tool length offset (G43 H, G43.1), mm; 0 under G49 (and
   /// before any G43), so it is the offset in effect either way. As in
   /// LinuxCNC, a change of it moves the controlled point, not the axes:
   /// position_mm's Z changes by minus the change.
   double tool_length_mm = 0.0;
-  int tool = 0;                ///< T in the spindle (after M6)
-  int selected_tool = 0;       ///< last T word
+  int tool = 0;           ///< T in the spindle (after M6)
+  int selected_tool = 0;  ///< last T word
   /// Canned cycles return to the initial level (G98) or to R (G99).
   /// LinuxCNC's interpreter starts in G99 (its retract mode is zero,
   /// R_PLANE, until G98; rs274 shows it), not G98.
@@ -101,11 +100,11 @@ struct State {
   bool cycle_il_known = false;
   double cycle_il_mm = 0.0;
   double feed = 0.0;
-  int feed_mode = 940;         ///< 930, 940, 950
+  int feed_mode = 940;                                    ///< 930, 940, 950
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  ///< machine coordinates
-  bool position_known = false; ///< false until every axis has been commanded
+  bool position_known = false;  ///< false until every axis has been commanded
   std::array<bool, 3> axis_known{};
-  bool ended = false;          ///< after M2 / M30
+  bool ended = false;  ///< after M2 / M30
   /// Spindle turning (M3 or M4 in effect; M5, M19 and the program's end
   /// stop it): LinuxCNC's G86 needs it ("Spindle not turning in g86").
   bool spindle_turning = false;
@@ -144,7 +143,9 @@ class Interpreter {
   const State& state() const { return s_; }
   const ProgramSetup& setup() const { return setup_; }
   /// Work offset of the active coordinate system, mm.
-  const Eigen::Vector3d& work_offset() const { return setup_.work_offset_mm[static_cast<size_t>(s_.coord_system)]; }
+  const Eigen::Vector3d& work_offset() const {
+    return setup_.work_offset_mm[static_cast<size_t>(s_.coord_system)];
+  }
 
  private:
   [[noreturn]] void fail(const Block& b, const Word* w, const std::string& msg) const;

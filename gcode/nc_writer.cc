@@ -1,12 +1,12 @@
 #include "gcode/nc_writer.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-
-#include <fmt/format.h>
 
 namespace volmap::nc {
 
@@ -30,8 +30,8 @@ inline void write_digits(std::uint32_t v, int count, char* end) {
 
 // Decimal digits of v < 1e9 (at least 1).
 inline int digit_count(std::uint32_t v) {
-  static constexpr std::uint32_t kPow10u[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000,
-                                              100000000, 1000000000};
+  static constexpr std::uint32_t kPow10u[] = {1,      10,      100,      1000,      10000,
+                                              100000, 1000000, 10000000, 100000000, 1000000000};
   // floor(log10) from the bit length (1233 / 4096 ~ log10(2)), corrected by one comparison.
   const int bits = 32 - __builtin_clz(v | 1);
   const int guess = (bits * 1233) >> 12;
@@ -43,8 +43,8 @@ inline int digit_count(std::uint32_t v) {
 // 10^decimals rounded, k >= 1e8 or more than 7 decimals; digits two at a
 // time from the right.
 char* detail::format_fixed_wide(double value, int decimals, std::uint32_t k, char* out) {
-  static constexpr std::uint32_t kPow10u[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000,
-                                              100000000, 1000000000};
+  static constexpr std::uint32_t kPow10u[] = {1,      10,      100,      1000,      10000,
+                                              100000, 1000000, 10000000, 100000000, 1000000000};
   char* p = out;
   if (value < 0) *p++ = '-';
   const std::uint32_t int_part = k / kPow10u[decimals], frac = k - int_part * kPow10u[decimals];
@@ -71,7 +71,8 @@ void append_number(std::string& out, double value, int decimals) {
 
 std::string format_number(double value, int decimals) {
   char buf[kNumberRoom];
-  if (const char* end = format_number_fast(value, decimals, buf)) return std::string(buf, static_cast<std::size_t>(end - buf));
+  if (const char* end = format_number_fast(value, decimals, buf))
+    return std::string(buf, static_cast<std::size_t>(end - buf));
   std::string s = fmt::format("{:.{}f}", value, decimals);
   if (s.find('.') != std::string::npos) {
     while (s.back() == '0') s.pop_back();
@@ -84,7 +85,8 @@ std::string format_number(double value, int decimals) {
 bool block_uses_lowercase(const Block& b) {
   for (const Word& w : b.words) {
     const char c = b.text[w.begin];
-    if (std::isalpha(static_cast<unsigned char>(c))) return std::islower(static_cast<unsigned char>(c)) != 0;
+    if (std::isalpha(static_cast<unsigned char>(c)))
+      return std::islower(static_cast<unsigned char>(c)) != 0;
   }
   return false;
 }
@@ -123,8 +125,8 @@ inline char* copy_bytes(char* out, const char* from, size_t n) {
 }
 }  // namespace
 
-char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::string_view insert, bool spaces,
-                    char* out) {
+char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::string_view insert,
+                    bool spaces, char* out) {
   // apply_edit's steps on a raw buffer (no capacity checks: the caller made
   // room for everything the line can become).
   const std::string_view t = b.text;

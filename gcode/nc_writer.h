@@ -103,8 +103,8 @@ void apply_edit(const Block& b, const BlockEdit& edit, std::string& out);
 /// The same written at `out`, which has room for b.text.size() +
 /// insert.size() + 1 bytes; `remove` (count indices) strictly ascending,
 /// `spaces` as block_uses_spaces(b). Returns the end of the text written.
-char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::string_view insert, bool spaces,
-                    char* out);
+char* apply_edit_to(const Block& b, const int* remove, std::size_t count, std::string_view insert,
+                    bool spaces, char* out);
 
 /// Upper or lower case as the block writes its letters (first letter word).
 bool block_uses_lowercase(const Block& b);

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Regenerates the explain sample recordings with `volmap simulate`.
-# Usage: samples/recordings/generate.sh [path/to/volmap]   (default: build/core/volmap)
+# Usage: samples/recordings/generate.sh [path/to/volmap]   (default: build/volmap)
 # Each <name>.csv is made from <name>.plan.json and the truth <name>.effects.json
 # (none for the null recordings) on the machine and geometry listed below.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-volmap="${1:-$root/build/core/volmap}"
+volmap="${1:-$root/build/volmap}"
 cd "$root"
 m3=samples/machines/hsu-3axis.json
 m5=samples/machines/lei-hsu-xyzac.json

@@ -18,14 +18,14 @@
 #include <string>
 #include <string_view>
 
-#include "core/errors_import.h"
-#include "core/input_error.h"
-#include "core/machine_json.h"
-#include "core/recordings.h"
+#include "core/common/input_error.h"
+#include "core/measure/recordings.h"
+#include "core/model/errors_csv.h"
+#include "core/model/errors_import.h"
+#include "core/model/machine_json.h"
 #include "gcode/nc_block.h"
 #include "gcode/nc_interpreter.h"
-#include "core/errors_csv.h"
-#include "postproc/post_program.h"
+#include "postproc/three_axis/post_program.h"
 
 namespace volmap::fuzz {
 
@@ -85,8 +85,10 @@ inline void nc_reader(std::string_view program) {
 /// bytes and count the same.
 inline void post(std::string_view input) {
   if (input.empty()) return;
-  static const Machine machine = load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/hsu-3axis.json");
-  static const ErrorSet errors = load_errors_csv(std::string(VOLMAP_SOURCE_DIR) + "/samples/errors/hsu-3axis.csv");
+  static const Machine machine =
+      load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/hsu-3axis.json");
+  static const ErrorSet errors =
+      load_errors_csv(std::string(VOLMAP_SOURCE_DIR) + "/samples/errors/hsu-3axis.csv");
   const auto options = static_cast<unsigned char>(input[0]);
   std::string_view program = input.substr(1);
   size_t cut = 0;
@@ -119,7 +121,8 @@ inline void post(std::string_view input) {
   }
   require(error[0] == error[1]);
   require(out[0] == out[1]);
-  require(report[0].lines == report[1].lines && report[0].lines_changed == report[1].lines_changed &&
+  require(report[0].lines == report[1].lines &&
+          report[0].lines_changed == report[1].lines_changed &&
           report[0].lines_added == report[1].lines_added &&
           report[0].points_corrected == report[1].points_corrected);
 }

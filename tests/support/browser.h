@@ -4,12 +4,12 @@
 // unless VOLMAP_REQUIRE_CHROMIUM=1 (CI), where they fail.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 namespace volmap::test {
 
@@ -38,14 +38,17 @@ inline std::string read_text_file(const std::string& path) {
 /// (empty when the page said nothing).
 inline void load_in_chromium(const std::string& html_path, std::string& dom, std::string& console) {
   const std::string dom_file = html_path + ".dom", log_file = html_path + ".log";
-  const std::string cmd = "timeout 120 chromium --headless --disable-gpu --no-sandbox --enable-logging=stderr --v=0 "
-                          "--dump-dom file://" + html_path + " >" + dom_file + " 2>" + log_file;
+  const std::string cmd =
+      "timeout 120 chromium --headless --disable-gpu --no-sandbox --enable-logging=stderr --v=0 "
+      "--dump-dom file://" +
+      html_path + " >" + dom_file + " 2>" + log_file;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   dom = read_text_file(dom_file);
   std::istringstream log(read_text_file(log_file));
   console.clear();
   for (std::string line; std::getline(log, line);)
-    if (line.find(":CONSOLE") != std::string::npos || line.find("Uncaught") != std::string::npos) console += line + "\n";
+    if (line.find(":CONSOLE") != std::string::npos || line.find("Uncaught") != std::string::npos)
+      console += line + "\n";
 }
 
 /// The console check sees errors: a page that throws must produce a line.

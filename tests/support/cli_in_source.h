@@ -4,16 +4,16 @@
 // empty folder per test for outputs.
 #pragma once
 
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "tests/support/cli_run.h"
 #include "tests/support/test_paths.h"
@@ -26,8 +26,8 @@ inline CliResult run_volmap_in_source(const std::string& args) {
   static int calls = 0;
   const std::string err_file = ::testing::TempDir() + "volmap_src_err_" + std::to_string(getpid()) +
                                "_" + std::to_string(++calls) + ".txt";
-  const std::string cmd = "cd '" + source_path("") + "' && '" + volmap_binary() + "' </dev/null " + args +
-                          " 2>'" + err_file + "'";
+  const std::string cmd = "cd '" + source_path("") + "' && '" + volmap_binary() + "' </dev/null " +
+                          args + " 2>'" + err_file + "'";
   CliResult r;
   FILE* p = popen(cmd.c_str(), "r");
   std::array<char, 4096> buf;
@@ -49,8 +49,8 @@ inline std::string file_bytes(const std::filesystem::path& p) {
 
 /// An empty folder under the test temporary folder, unique to `name`.
 inline std::filesystem::path fresh_dir(const std::string& name) {
-  const std::filesystem::path d =
-      std::filesystem::path(::testing::TempDir()) / ("volmap_" + name + "_" + std::to_string(getpid()));
+  const std::filesystem::path d = std::filesystem::path(::testing::TempDir()) /
+                                  ("volmap_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
   return d;

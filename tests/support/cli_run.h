@@ -3,13 +3,13 @@
 // parallel).
 #pragma once
 
-#include <array>
-#include <cstdio>
-#include <string>
-
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
 
 #include "tests/support/test_paths.h"
 

@@ -4,7 +4,7 @@
 #include <sstream>
 #include <string>
 
-#include "core/plan.h"
+#include "core/measure/plan.h"
 
 namespace volmap::test {
 

@@ -7,8 +7,8 @@
 #include <sstream>
 #include <string>
 
-#include "core/errors_csv.h"
-#include "core/machine_json.h"
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap::test {

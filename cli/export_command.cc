@@ -1,0 +1,117 @@
+// volmap export: writes a table file (volmap map) in a format for people or
+// a controller (docs/exports.md) into a folder.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "cli/commands.h"
+#include "core/model/errors_import.h"
+#include "core/model/machine_json.h"
+#include "maps/exports/exporters.h"
+#include "maps/tables/output_file.h"
+#include "maps/tables/table_file.h"
+
+namespace volmap::cli {
+
+namespace {
+
+Runner register_export(CLI::App& app) {
+  struct Opts {
+    std::string table, format, output, machine, errors, errors_format = "auto";
+    double detection_unit_um = 1.0;
+    bool json = false;
+  };
+  auto o = std::make_shared<Opts>();
+  std::string formats;
+  for (const std::string& f : maps::export_formats()) formats += (formats.empty() ? "" : ", ") + f;
+  CLI::App* sub = app.add_subcommand(
+      "export", "Writes a table (volmap map) for people or a controller (docs/exports.md)");
+  sub->add_option("--table", o->table, "Table file written by volmap map")->required();
+  sub->add_option("--format", o->format, "Format: " + formats)->required();
+  sub->add_option("-o,--output", o->output, "Folder to write the files into (created when missing)")
+      ->required();
+  sub->add_option("--machine", o->machine,
+                  "Machine definition: its home position picks the line of one-dimensional "
+                  "controller tables (default: each axis's travel start)");
+  sub->add_option(
+      "--errors", o->errors,
+      "The errors the table was built from (errors.md CSV, ISG CSV or Etalon): needed by "
+      "isg-csv and by the KinematicsComp tables of heidenhain; default the errors file the table "
+      "names, when it exists");
+  sub->add_option("--errors-format", o->errors_format,
+                  "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv "
+                  "(Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
+      ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
+  sub->add_option("--detection-unit-um", o->detection_unit_um,
+                  "fanuc: detection unit of the axes, um (default 1); compensation values are "
+                  "integers in it")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--json", o->json, "Write the list of files as one JSON document to stdout");
+  sub->footer(
+      "Example:\n  volmap export --table hsu.vmt --format linuxcnc -o hsu-linuxcnc/\n"
+      "  volmap export --table hsu.vmt --format heidenhain --errors samples/errors/hsu-3axis.csv "
+      "-o tnc/");
+
+  return [o]() -> int {
+    maps::refuse_output_equal_to_input(o->output, {o->table, o->machine, o->errors});
+    const maps::VolumetricTable table = maps::load_table(o->table);
+    maps::ExportOptions options;
+    if (!o->machine.empty()) {
+      const Machine m = load_machine_json(o->machine);
+      if (m.axis_count() != table.axis_count())
+        throw std::invalid_argument(fmt::format("{}: machine {} has {} axes, the table {} has {}",
+                                                o->machine, m.name, m.axis_count(), o->table,
+                                                table.axis_count()));
+      for (int i = 0; i < m.axis_count(); ++i) options.home.push_back(m.home[i]);
+    }
+    options.detection_unit_mm = o->detection_unit_um * 1e-3;
+    std::optional<ErrorSet> errors;
+    if (!o->errors.empty()) {
+      errors = load_errors(o->errors, parse_errors_format(o->errors_format));
+      options.errors = &*errors;
+    } else if (!table.errors_source.empty() && table.errors_source != "-" &&
+               std::filesystem::is_regular_file(table.errors_source)) {
+      // The table names the errors file it was built from (as given to
+      // volmap map): formats that export the component errors themselves
+      // (isg-csv, HEIDENHAIN KinematicsComp) read it from there when
+      // --errors is not given, so `export --table T --format F -o DIR` works
+      // as cli.md writes it. --errors overrides.
+      errors = load_errors(table.errors_source, ErrorsFormat::kAuto);
+      options.errors = &*errors;
+    }
+    std::vector<maps::ExportFile> files;
+    try {
+      files = maps::export_table(table, o->format, options);
+    } catch (const maps::ExportError& e) {
+      throw std::invalid_argument(fmt::format("{}: {}", o->table, e.what()));
+    }
+    maps::write_export(o->output, files);
+    if (o->json) {
+      nlohmann::ordered_json doc;
+      doc["format"] = o->format;
+      doc["folder"] = o->output;
+      nlohmann::ordered_json list = nlohmann::ordered_json::array();
+      for (const maps::ExportFile& f : files)
+        list.push_back({{"name", f.name}, {"bytes", f.text.size()}});
+      doc["files"] = list;
+      std::cout << doc.dump(2) << "\n";
+      return 0;
+    }
+    std::cout << fmt::format("Exported {} ({}) as {} into {}:\n", o->table, table.machine_name,
+                             o->format, o->output);
+    for (const maps::ExportFile& f : files)
+      std::cout << fmt::format("  {}  ({} bytes)\n", f.name, f.text.size());
+    return 0;
+  };
+}
+
+}  // namespace
+
+static const CommandRegistration kExport(41, register_export);
+
+}  // namespace volmap::cli

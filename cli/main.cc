@@ -1,0 +1,71 @@
+// volmap: geometric error models, compensation tables and NC post-processing
+// for machine tools. Exit status: 0 success, 2 usage error, 1 anything else
+// (one line on stderr naming the file and line and what is wrong).
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cli/commands.h"
+
+namespace volmap::cli {
+namespace {
+std::vector<std::pair<int, Registrar>>& registry() {
+  static std::vector<std::pair<int, Registrar>> r;
+  return r;
+}
+}  // namespace
+CommandRegistration::CommandRegistration(int order, Registrar registrar) {
+  registry().emplace_back(order, std::move(registrar));
+}
+}  // namespace volmap::cli
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "volmap: machine-tool geometric error models, compensation tables and "
+      "NC post-processing (Hsu; Lei & Hsu 2003)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("volmap 0.1.0"));
+  std::map<const CLI::App*, volmap::cli::Runner> runners;
+  auto commands = volmap::cli::registry();
+  std::stable_sort(commands.begin(), commands.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (auto& [order, registrar] : commands) {
+    volmap::cli::Runner r = registrar(app);
+    runners[app.get_subcommands({}).back()] = std::move(r);
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "volmap: " << e.what() << " (see volmap --help)\n";
+    return 2;
+  }
+  try {
+    for (const CLI::App* sub : app.get_subcommands()) return runners.at(sub)();
+  } catch (const volmap::cli::UsageError& e) {
+    std::cerr << "volmap: " << e.what() << " (see volmap "
+              << (app.get_subcommands().empty() ? ""
+                                                : app.get_subcommands().front()->get_name() + " ")
+              << "--help)\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::string msg = e.what();
+    for (char& c : msg)
+      if (c == '\n') c = ' ';
+    std::cerr << "volmap: " << msg << "\n";
+    return 1;
+  }
+  return 2;
+}

@@ -1,0 +1,181 @@
+// volmap post: an NC program rewritten for the real machine (three-axis).
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "cli/commands.h"
+#include "cli/five_axis_options.h"
+#include "cli/program_setup.h"
+#include "core/common/atomic_file.h"
+#include "core/common/input_error.h"
+#include "core/model/errors_csv.h"
+#include "core/model/errors_import.h"
+#include "core/model/machine_json.h"
+#include "maps/tables/table_file.h"
+#include "postproc/five_axis/five_axis_post.h"
+#include "postproc/three_axis/corrector.h"
+#include "postproc/three_axis/post_program.h"
+
+namespace volmap::cli {
+namespace {
+
+// The five-axis path (postproc/five_axis/five_axis_post.h).
+template <typename Opts>
+int run_five_axis(const Opts& o, const Machine& m) {
+  if (o.errors.empty() && o.table.empty())
+    throw std::invalid_argument("post needs --errors or --table");
+  post::FiveAxisPostOptions opt;
+  opt.form = o.five.form();
+  opt.tolerance_mm = o.tolerance_um * 1e-3;
+  opt.angle_tolerance_rad = o.five.angle_tolerance_urad * 1e-6;
+  opt.decimals = o.decimals;
+  opt.angle_decimals = o.five.angle_decimals;
+  opt.feed = o.five.feed_output == "per-minute" ? post::FeedOutput::kPerMinute
+                                                : post::FeedOutput::kInverseTime;
+  opt.initial = o.five.initial(m, o.placement);
+  opt.outside = o.clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+  opt.correction_iterations = o.five.iterate ? 20 : 1;
+  std::ifstream file_in;
+  std::istream* in = &std::cin;
+  std::string in_name = "<stdin>";
+  if (o.in != "-") {
+    file_in.open(o.in, std::ios::binary);
+    if (!file_in) throw InputError(o.in, 0, "cannot open the program; check the path");
+    in = &file_in;
+    in_name = o.in;
+  }
+  AtomicOutput out(o.out, {o.in, o.machine, o.errors.empty() ? o.table : o.errors});
+  post::FiveAxisPostReport r;
+  if (!o.table.empty()) {
+    const maps::VolumetricTable t = maps::load_table(o.table);
+    r = post::post_five_axis(*in, in_name, out.stream(), m, t, opt);
+  } else {
+    r = post::post_five_axis(*in, in_name, out.stream(), m,
+                             load_errors(o.errors, parse_errors_format(o.errors_format)), opt);
+  }
+  out.commit();
+  if (isatty(2))
+    std::cerr << fmt::format(
+        "five-axis ({} input): {} lines, {} moves, {} poses ({} singular), {} lines added, "
+        "max correction {:.2f} um / {:.2f} urad\n",
+        post::input_form_name(r.form), r.lines, r.moves, r.poses, r.singular_poses, r.lines_added,
+        r.max_correction_mm * 1e3, r.max_correction_rad * 1e6);
+  return 0;
+}
+
+Runner register_post(CLI::App& app) {
+  struct Opts {
+    std::string machine, errors, errors_format = "auto", table, in, out;
+    ProgramSetupOptions placement;
+    FiveAxisCliOptions five;
+    double tolerance_um = 1.0;
+    int decimals = -1;
+    bool clamp = false;
+    bool expand_cycles = false;
+    bool keep_arcs = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* sub = app.add_subcommand("post",
+                                     "Rewrite an NC program for the real machine (correction of "
+                                     "every point, segmented within tolerance)");
+  sub->add_option("--machine", o->machine, "Machine definition (JSON)")->required();
+  auto* errors = sub->add_option("--errors", o->errors,
+                                 "Errors file: errors.md CSV, ISG CSV or Etalon exchange format");
+  sub->add_option("--errors-format", o->errors_format,
+                  "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv "
+                  "(Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
+      ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
+  auto* table = sub->add_option("--table", o->table,
+                                "Compensation table (volmap map) instead of --errors (three-axis: "
+                                "the machine file's tool only)");
+  errors->excludes(table);
+  sub->add_option("--tolerance-um", o->tolerance_um,
+                  "Bound on the deviation of the actual path from the nominal one, also between "
+                  "points (default 1)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--decimals", o->decimals,
+                  "Decimals of rewritten numbers (default 4 in mm, 5 in inch)")
+      ->check(CLI::Range(0, 9));
+  o->placement.add_to(*sub);
+  o->five.add_to(*sub, /*post=*/true);
+  sub->add_flag("--clamp", o->clamp,
+                "Hold the end value of an error table outside it (default: refuse)");
+  sub->add_flag("--expand-cycles", o->expand_cycles,
+                "Write canned cycles G73 G81 G82 G83 G85 G89 out as their moves (LinuxCNC's), so "
+                "the feed into the hole keeps the tolerance too (three axes)");
+  sub->add_flag("--keep-arcs", o->keep_arcs,
+                "Keep G2/G3 arcs as arcs (corrected end point and centre) where the arc the "
+                "controller runs stays within "
+                "the tolerance and no axis reverses on it; others are split into lines as by "
+                "default (three axes)");
+  sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
+  sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
+  sub->footer(
+      "Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors "
+      "samples/errors/hsu-3axis.csv \\\n"
+      "      --work-offset 100,100,50 part.ngc -o part-compensated.ngc\n"
+      "  volmap post --machine samples/machines/lei-hsu-xyzac.json --errors "
+      "samples/errors/lei-hsu-xyzac.csv \\\n"
+      "      --part-origin 0,0,0 impeller-7bl-xyzac.ngc -o impeller-machine.ngc");
+  return [o]() -> int {
+    const Machine m = load_machine_json(o->machine);
+    if (o->five.applies(m)) {
+      if (o->expand_cycles) throw UsageError("--expand-cycles is for three-axis programs");
+      if (o->keep_arcs) throw UsageError("--keep-arcs is for three-axis programs");
+      return run_five_axis(*o, o->five.place_part(m));
+    }
+    if (o->errors.empty() && o->table.empty()) throw UsageError("post needs --errors or --table");
+    std::optional<maps::VolumetricTable> table;
+    ErrorSet e;
+    if (!o->table.empty()) {
+      table = maps::load_table(o->table);
+      try {
+        post::Corrector check(m, *table, OutsidePolicy::kError);
+      } catch (const std::invalid_argument& bad) {
+        throw InputError(o->table, 0, bad.what());
+      }
+    } else {
+      e = load_errors(o->errors, parse_errors_format(o->errors_format));
+    }
+    const nc::ProgramSetup setup = o->placement.load(m);
+    post::PostOptions opt;
+    opt.tolerance_mm = o->tolerance_um * 1e-3;
+    opt.decimals = o->decimals;
+    opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+    opt.expand_cycles = o->expand_cycles;
+    opt.keep_arcs = o->keep_arcs;
+    std::ifstream file_in;
+    std::istream* in = &std::cin;
+    std::string in_name = "<stdin>";
+    if (o->in != "-") {
+      file_in.open(o->in, std::ios::binary);
+      if (!file_in) throw InputError(o->in, 0, "cannot open the program; check the path");
+      in = &file_in;
+      in_name = o->in;
+    }
+    std::vector<std::string> inputs{o->in, o->machine, table ? o->table : o->errors};
+    if (!o->placement.var_file.empty()) inputs.push_back(o->placement.var_file);
+    if (!o->placement.tool_table.empty()) inputs.push_back(o->placement.tool_table);
+    // "-": spooled to a temporary file and copied out when complete
+    // (core/common/atomic_file.h): constant memory, and nothing on failure.
+    AtomicOutput out(o->out, inputs);
+    const post::PostReport r =
+        table ? post::post_program(*in, in_name, out.stream(), m, *table, setup, opt)
+              : post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
+    out.commit();
+    if (isatty(2))
+      std::cerr << fmt::format("{} lines, {} changed, {} added, max correction {:.2f} um\n",
+                               r.lines, r.lines_changed, r.lines_added, r.max_correction_mm * 1e3);
+    return 0;
+  };
+}
+
+}  // namespace
+
+static const CommandRegistration kPost(40, register_post);
+
+}  // namespace volmap::cli

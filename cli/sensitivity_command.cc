@@ -1,0 +1,145 @@
+// volmap sensitivity: the error-gain table (Hsu Tables I and II).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "cli/commands.h"
+#include "cli/parse_util.h"
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
+#include "core/model/sensitivity.h"
+
+namespace volmap::cli {
+
+namespace {
+Runner register_sensitivity(CLI::App& app) {
+  struct Opts {
+    std::string machine, errors, at, model = "independent";
+    bool json = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* sub =
+      app.add_subcommand("sensitivity",
+                         "Error-gain table: change of the tool pose per unit of each geometric "
+                         "error (Hsu Table I: dependent, Table II: independent)");
+  sub->add_option("--machine", o->machine, "Machine definition (JSON, docs/machine-format.md)")
+      ->required();
+  sub->add_option("--at", o->at,
+                  "Axis position X,Y,Z[,A,C] in the machine's axis order (mm, degrees)")
+      ->required();
+  sub->add_option("--model", o->model, "independent (Table II, default) or dependent (Table I)")
+      ->check(CLI::IsMember({"independent", "dependent"}));
+  sub->add_option("--errors", o->errors,
+                  "Errors CSV (errors.md): adds each error's value and its contribution "
+                  "to the tool-tip error at --at, and the total (first order and exact)");
+  sub->add_flag("--json", o->json, "Write one JSON document to stdout");
+  sub->footer(
+      "Example:\n  volmap sensitivity --machine samples/machines/hsu-3axis.json "
+      "--at 250,200,150 --model dependent --json");
+
+  return [o]() -> int {
+    const Machine m = load_machine_json(o->machine);
+    const AxisVector u = parse_axis_position(m, o->at, "--at");
+    const Formulation f =
+        o->model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
+    const std::vector<ErrorGain> gains = error_gains(m, f, u);
+    auto clean = [](double x) { return std::abs(x) < 1e-12 ? 0.0 : x; };
+    // With --errors: value of each error at u and its contribution (um).
+    std::optional<ErrorModel> model;
+    std::vector<double> values;
+    if (!o->errors.empty()) {
+      model.emplace(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
+      values = error_values(m, model->errors(), u, OutsidePolicy::kError);
+    }
+    auto display_value = [](const ErrorGain& g, double v) { return v * (g.angular ? 1e6 : 1e3); };
+    auto contribution_um = [&](size_t k) -> Eigen::Vector3d {
+      return gains[k].dP * values[k] * 1e3;
+    };
+    auto um3 = [&](const Eigen::Vector3d& v) {
+      return nlohmann::ordered_json::array({clean(v.x()), clean(v.y()), clean(v.z())});
+    };
+    if (o->json) {
+      nlohmann::ordered_json doc;
+      doc["model"] = o->model;
+      nlohmann::ordered_json at = nlohmann::ordered_json::object();
+      for (int i = 0; i < m.axis_count(); ++i) {
+        const AxisName a = m.axis_order[static_cast<size_t>(i)];
+        at[std::string(1, axis_char(a))] = display_position(a, u[i]);
+      }
+      doc["at"] = at;
+      nlohmann::ordered_json g = nlohmann::ordered_json::object();
+      for (const ErrorGain& e : gains) {
+        g[e.name] = {{"dx", clean(e.dP.x())}, {"dy", clean(e.dP.y())}, {"dz", clean(e.dP.z())},
+                     {"di", clean(e.dQ.x())}, {"dj", clean(e.dQ.y())}, {"dk", clean(e.dQ.z())}};
+      }
+      doc["gains"] = g;
+      if (model) {
+        nlohmann::ordered_json c = nlohmann::ordered_json::object();
+        for (size_t k = 0; k < gains.size(); ++k) {
+          const Eigen::Vector3d d = contribution_um(k);
+          c[gains[k].name] = {{"value", clean(display_value(gains[k], values[k]))},
+                              {"dx_um", clean(d.x())},
+                              {"dy_um", clean(d.y())},
+                              {"dz_um", clean(d.z())}};
+        }
+        const PoseError fo = model->first_order(u), ex = model->exact(u);
+        doc["errors"] = {{"file", o->errors},
+                         {"contributions", c},
+                         {"first_order_um", um3(fo.dP_mm * 1e3)},
+                         {"exact_um", um3(ex.dP_mm * 1e3)},
+                         {"exact_axis_urad", um3(ex.dQ * 1e6)}};
+      }
+      std::cout << doc.dump(2) << "\n";
+      return 0;
+    }
+    std::cout << fmt::format("Error gains of {} ({} model, {}) at {}\n",
+                             m.name.empty() ? o->machine : m.name, o->model,
+                             o->model == "dependent" ? "Hsu Table I" : "Hsu Table II", o->at);
+    std::cout << "Position gains in mm per mm (translational errors) or mm per rad "
+                 "(angular);\norientation gains in rad per rad. Workpiece coordinates.\n\n";
+    std::cout << fmt::format("{:<6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>7}", "error", "dx", "dy",
+                             "dz", "di", "dj", "dk");
+    if (model)
+      std::cout << fmt::format(" | {:>9} {:>8} {:>8} {:>8}", "value", "dx um", "dy um", "dz um");
+    std::cout << "\n";
+    for (size_t k = 0; k < gains.size(); ++k) {
+      const ErrorGain& e = gains[k];
+      std::cout << fmt::format("{:<6} {:>10.3f} {:>10.3f} {:>10.3f} {:>7.3f} {:>7.3f} {:>7.3f}",
+                               e.name, clean(e.dP.x()), clean(e.dP.y()), clean(e.dP.z()),
+                               clean(e.dQ.x()), clean(e.dQ.y()), clean(e.dQ.z()));
+      if (model) {
+        const Eigen::Vector3d d = contribution_um(k);
+        std::cout << fmt::format(" | {:>6.2f} {:<2} {:>8.3f} {:>8.3f} {:>8.3f}",
+                                 clean(display_value(e, values[k])), e.angular ? "ur" : "um",
+                                 clean(d.x()), clean(d.y()), clean(d.z()));
+      }
+      std::cout << "\n";
+    }
+    if (model) {
+      const PoseError fo = model->first_order(u), ex = model->exact(u);
+      std::cout << fmt::format(
+          "\nTool-tip error at {} (workpiece coordinates, actual - nominal):\n"
+          "  first order  dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um\n"
+          "  exact HTM    dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um  |dP| {:.3f} um\n"
+          "  tool axis    di {:8.3f} ur  dj {:8.3f} ur  dk {:8.3f} ur\n"
+          "(value: um for translational errors, ur = urad for angular ones; mean of both\n"
+          " directions for bidirectional tables)\n",
+          o->at, clean(fo.dP_mm.x() * 1e3), clean(fo.dP_mm.y() * 1e3), clean(fo.dP_mm.z() * 1e3),
+          clean(ex.dP_mm.x() * 1e3), clean(ex.dP_mm.y() * 1e3), clean(ex.dP_mm.z() * 1e3),
+          ex.dP_mm.norm() * 1e3, clean(ex.dQ.x() * 1e6), clean(ex.dQ.y() * 1e6),
+          clean(ex.dQ.z() * 1e6));
+    }
+    return 0;
+  };
+}
+
+}  // namespace
+
+static const CommandRegistration kSensitivity(10, register_sensitivity);
+
+}  // namespace volmap::cli

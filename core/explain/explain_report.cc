@@ -1,0 +1,299 @@
+// Writers of the explain result: JSON (explain.md), the stdout summary and
+// the self-contained HTML report (inline SVG, no script, no network).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/common/html.h"
+#include "core/explain/explain.h"
+
+namespace volmap {
+namespace {
+
+double rounded(double v, int digits = 6) {
+  if (!std::isfinite(v) || v == 0) return v == 0 ? 0.0 : v;
+  return std::stod(fmt::format("{:.{}g}", v, digits));
+}
+nlohmann::json num(double v) {
+  if (!std::isfinite(v)) return nullptr;
+  return rounded(v);
+}
+nlohmann::json num(const std::optional<double>& v) { return v ? num(*v) : nlohmann::json(nullptr); }
+nlohmann::json axis_json(const std::optional<AxisName>& a) {
+  return a ? nlohmann::json(std::string(1, axis_char(*a))) : nlohmann::json(nullptr);
+}
+
+std::string params_text(const Finding& f) {
+  std::string s;
+  for (const auto& [k, v] : f.parameters) {
+    if (!s.empty()) s += ", ";
+    s += k + " " + (v.is_string() ? v.get<std::string>() : v.dump());
+    for (const auto& [ek, ev] : f.std_errors)
+      if (ek == k && std::isfinite(ev)) s += fmt::format(" ± {:.2g}", ev);
+  }
+  return s;
+}
+
+std::string opt_um(const std::optional<double>& v) {
+  return v ? fmt::format("{:.3f}", *v) : std::string("n/a");
+}
+
+/// One scatter panel: points (x, y), y range shared by the pair of panels.
+std::string svg_panel(const std::string& title, const std::string& xlabel,
+                      const std::vector<double>& x, const std::vector<double>& y,
+                      const std::vector<int>& group, double y_lo, double y_hi) {
+  const double W = 420, H = 260, L = 56, R = 12, T = 24, B = 40;
+  double x_lo = INFINITY, x_hi = -INFINITY;
+  for (double v : x)
+    if (std::isfinite(v)) {
+      x_lo = std::min(x_lo, v);
+      x_hi = std::max(x_hi, v);
+    }
+  if (!std::isfinite(x_lo)) x_lo = 0, x_hi = 1;
+  if (x_hi <= x_lo) x_hi = x_lo + 1;
+  const double pad = 0.03 * (x_hi - x_lo);
+  x_lo -= pad;
+  x_hi += pad;
+  auto px = [&](double v) { return L + (v - x_lo) / (x_hi - x_lo) * (W - L - R); };
+  auto py = [&](double v) { return T + (y_hi - v) / (y_hi - y_lo) * (H - T - B); };
+  std::ostringstream s;
+  s << fmt::format(
+      "<svg width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
+      "role=\"img\">",
+      W, H);
+  s << fmt::format("<title>{}</title>", html_escape(title));
+  s << fmt::format(
+      "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#fff\" stroke=\"#888\"/>", L, T,
+      W - L - R, H - T - B);
+  if (y_lo < 0 && y_hi > 0)
+    s << fmt::format(
+        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#bbb\"/>", L, py(0),
+        W - R, py(0));
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
+    const int g = group.empty() ? 0 : group[i];
+    const char* colour = g > 0 ? "#c0392b" : (g < 0 ? "#2471a3" : "#34495e");
+    s << fmt::format(
+        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2\" fill=\"{}\" fill-opacity=\"0.6\"/>", px(x[i]),
+        py(y[i]), colour);
+  }
+  s << fmt::format("<text x=\"{}\" y=\"16\" font-size=\"13\">{}</text>", L, html_escape(title));
+  s << fmt::format(
+      "<text x=\"{:.0f}\" y=\"{:.0f}\" font-size=\"11\" text-anchor=\"middle\">{}</text>",
+      (L + W - R) / 2, H - 6, html_escape(xlabel));
+  s << fmt::format("<text x=\"{:.0f}\" y=\"{:.0f}\" font-size=\"10\">{:.4g}</text>", L, H - B + 13,
+                   x_lo + pad);
+  s << fmt::format(
+      "<text x=\"{:.0f}\" y=\"{:.0f}\" font-size=\"10\" text-anchor=\"end\">{:.4g}</text>", W - R,
+      H - B + 13, x_hi - pad);
+  s << fmt::format("<text x=\"{}\" y=\"{:.0f}\" font-size=\"10\" text-anchor=\"end\">{:.3g}</text>",
+                   L - 4, T + 8, y_hi);
+  s << fmt::format("<text x=\"{}\" y=\"{:.0f}\" font-size=\"10\" text-anchor=\"end\">{:.3g}</text>",
+                   L - 4, H - B, y_lo);
+  s << fmt::format(
+      "<text x=\"12\" y=\"{:.0f}\" font-size=\"11\" transform=\"rotate(-90 12 {:.0f})\" "
+      "text-anchor=\"middle\">residual (um)</text>",
+      (T + H - B) / 2, (T + H - B) / 2);
+  s << "</svg>";
+  return s.str();
+}
+
+}  // namespace
+
+nlohmann::ordered_json explain_json(const ExplainResult& r) {
+  nlohmann::ordered_json j;
+  j["format"] = "volmap-explain/1";
+  j["recordings"] = r.recordings_file;
+  j["observations"] = r.observations;
+  j["runs"] = r.runs;
+  j["baseline"] = {{"description", r.baseline_description},
+                   {"rms_um", num(r.baseline_rms_um)},
+                   {"heldout_rms_um", num(r.baseline_heldout_rms_um)}};
+  nlohmann::ordered_json mm = nlohmann::ordered_json::array();
+  for (const Mismatch& m : r.mismatch)
+    mm.push_back({{"component", m.component},
+                  {"regressor", m.regressor},
+                  {"where", m.where},
+                  {"strength", num(rounded(m.strength, 3))}});
+  j["mismatch"] = mm;
+  nlohmann::ordered_json fs = nlohmann::ordered_json::array();
+  for (const Finding& f : r.findings) {
+    nlohmann::ordered_json o;
+    o["effect"] = f.effect;
+    o["axis"] = axis_json(f.axis);
+    nlohmann::ordered_json p = nlohmann::ordered_json::object(),
+                           se = nlohmann::ordered_json::object();
+    for (const auto& [k, v] : f.parameters) p[k] = v;
+    // "name/i" entries belong to an array parameter (setup_shift's
+    // per_run_um): the same shape as the parameter.
+    for (const auto& [k, v] : f.std_errors) {
+      const std::size_t slash = k.find('/');
+      if (slash == std::string::npos) {
+        se[k] = num(v);
+      } else {
+        nlohmann::ordered_json& arr = se[k.substr(0, slash)];
+        if (!arr.is_array()) arr = nlohmann::ordered_json::array();
+        arr.push_back(nlohmann::ordered_json(num(v)));
+      }
+    }
+    o["parameters"] = p;
+    o["std_errors"] = se;
+    o["rms_before_um"] = num(f.rms_before_um);
+    o["rms_after_um"] = num(f.rms_after_um);
+    o["heldout_rms_before_um"] = num(f.heldout_rms_before_um);
+    o["heldout_rms_after_um"] = num(f.heldout_rms_after_um);
+    o["evidence"] = {{"delta_bic", num(rounded(f.delta_bic, 5))}, {"regressor", f.plot.regressor}};
+    o["explanation"] = f.explanation;
+    fs.push_back(o);
+  }
+  j["findings"] = fs;
+  nlohmann::ordered_json cs = nlohmann::ordered_json::array();
+  for (const Confounded& c : r.confounded)
+    cs.push_back({{"effects", c.effects},
+                  {"axis", axis_json(c.axis)},
+                  {"explanation", c.explanation},
+                  {"remedy", c.remedy}});
+  j["confounded"] = cs;
+  j["final"] = {{"rms_um", num(r.final_rms_um)}, {"heldout_rms_um", num(r.final_heldout_rms_um)}};
+  j["notes"] = r.notes;
+  return j;
+}
+
+std::string explain_text(const ExplainResult& r) {
+  std::ostringstream s;
+  s << fmt::format("{}: {} observations in {} run(s)\n", r.recordings_file, r.observations, r.runs);
+  s << fmt::format("baseline: {}\n  rms {:.3f} um, held-out rms {} um\n", r.baseline_description,
+                   r.baseline_rms_um, opt_um(r.baseline_heldout_rms_um));
+  if (!r.mismatch.empty()) {
+    s << "strongest structure in the residuals:\n";
+    for (std::size_t i = 0; i < std::min<std::size_t>(4, r.mismatch.size()); ++i)
+      s << fmt::format("  {} vs {} (strength {:.2f}): {}\n", r.mismatch[i].component,
+                       r.mismatch[i].regressor, r.mismatch[i].strength, r.mismatch[i].where);
+  }
+  if (r.findings.empty()) s << "findings: none beyond the baseline and noise\n";
+  for (std::size_t i = 0; i < r.findings.size(); ++i) {
+    const Finding& f = r.findings[i];
+    s << fmt::format(
+        "{}. {} {}: {}\n   rms {:.3f} -> {:.3f} um, held-out {} -> {} um, delta BIC {:.1f}\n   "
+        "{}\n",
+        i + 1, f.effect, f.axis ? std::string(1, axis_char(*f.axis)) : std::string("-"),
+        params_text(f), f.rms_before_um, f.rms_after_um, opt_um(f.heldout_rms_before_um),
+        opt_um(f.heldout_rms_after_um), f.delta_bic, f.explanation);
+  }
+  for (const Confounded& c : r.confounded) {
+    std::string names;
+    for (const std::string& e : c.effects) names += (names.empty() ? "" : " / ") + e;
+    s << fmt::format("confounded: {} on {}: {}\n   remedy: {}\n", names,
+                     c.axis ? std::string(1, axis_char(*c.axis)) : std::string("-"), c.explanation,
+                     c.remedy);
+  }
+  s << fmt::format("final: rms {:.3f} um, held-out rms {} um\n", r.final_rms_um,
+                   opt_um(r.final_heldout_rms_um));
+  return s.str();
+}
+
+std::string explain_html(const ExplainResult& r) {
+  std::ostringstream s;
+  s << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+       "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src "
+       "'unsafe-inline'; "
+       "img-src data:\">\n<title>volmap explain: "
+    << html_escape(r.recordings_file)
+    << "</title>\n<style>\nbody{font-family:sans-serif;margin:24px;max-width:1000px}\n"
+       "table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:4px "
+       "8px;text-align:left;"
+       "font-size:13px}\nth{background:#f3f3f3}.plots{display:flex;gap:12px;flex-wrap:wrap}\n"
+       ".note{color:#555;font-size:13px}\n</style>\n</head>\n<body>\n";
+  s << "<h1>volmap explain</h1>\n";
+  s << fmt::format("<p>Recording <code>{}</code>: {} observations in {} run(s).</p>\n",
+                   html_escape(r.recordings_file), r.observations, r.runs);
+  s << fmt::format(
+      "<p>Baseline: {}.<br>RMS {:.3f} um, held-out (leave one run out) {} um. Final: RMS {:.3f} "
+      "um, "
+      "held-out {} um.</p>\n",
+      html_escape(r.baseline_description), r.baseline_rms_um, opt_um(r.baseline_heldout_rms_um),
+      r.final_rms_um, opt_um(r.final_heldout_rms_um));
+  s << "<h2>Summary</h2>\n";
+  if (r.findings.empty()) {
+    s << "<p>No finding: nothing in the recording holds up beyond the baseline and noise.</p>\n";
+  } else {
+    s << "<table "
+         "id=\"summary\">\n<tr><th>#</th><th>effect</th><th>axis</th><th>parameters</th><th>RMS "
+         "before "
+         "&rarr; after (um)</th><th>held-out before &rarr; after "
+         "(um)</th><th>&Delta;BIC</th></tr>\n";
+    for (std::size_t i = 0; i < r.findings.size(); ++i) {
+      const Finding& f = r.findings[i];
+      s << fmt::format(
+          "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3f} &rarr; {:.3f}</td><td>{} "
+          "&rarr; "
+          "{}</td><td>{:.1f}</td></tr>\n",
+          i + 1, f.effect, f.axis ? std::string(1, axis_char(*f.axis)) : "-",
+          html_escape(params_text(f)), f.rms_before_um, f.rms_after_um,
+          opt_um(f.heldout_rms_before_um), opt_um(f.heldout_rms_after_um), f.delta_bic);
+    }
+    s << "</table>\n";
+  }
+  if (!r.confounded.empty()) {
+    s << "<h2>Confounded: what this recording cannot "
+         "decide</h2>\n<table>\n<tr><th>effects</th><th>axis</th>"
+         "<th>why</th><th>test that would separate them</th></tr>\n";
+    for (const Confounded& c : r.confounded) {
+      std::string names;
+      for (const std::string& e : c.effects) names += (names.empty() ? "" : " / ") + e;
+      s << fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                       html_escape(names), c.axis ? std::string(1, axis_char(*c.axis)) : "-",
+                       html_escape(c.explanation), html_escape(c.remedy));
+    }
+    s << "</table>\n";
+  }
+  s << "<h2>Where the baseline disagrees</h2>\n";
+  if (r.mismatch.empty()) {
+    s << "<p>No regressor explains more than 5 % of the baseline residual variance.</p>\n";
+  } else {
+    s << "<table>\n<tr><th>component</th><th>regressor</th><th>strength</th><th>where</th></tr>\n";
+    for (const Mismatch& m : r.mismatch)
+      s << fmt::format("<tr><td>{}</td><td>{}</td><td>{:.2f}</td><td>{}</td></tr>\n", m.component,
+                       html_escape(m.regressor), m.strength, html_escape(m.where));
+    s << "</table>\n";
+  }
+  for (std::size_t i = 0; i < r.findings.size(); ++i) {
+    const Finding& f = r.findings[i];
+    const std::string ax = f.axis ? std::string(1, axis_char(*f.axis)) : "-";
+    s << fmt::format("<h2 id=\"finding-{}\">{}. {} {}</h2>\n<p>{}</p>\n<p class=\"note\">{}</p>\n",
+                     i + 1, i + 1, f.effect, ax, html_escape(f.explanation),
+                     html_escape(params_text(f)));
+    double lo = INFINITY, hi = -INFINITY;
+    for (const std::vector<double>* v : {&f.plot.before_um, &f.plot.after_um})
+      for (double y : *v)
+        if (std::isfinite(y)) {
+          lo = std::min(lo, y);
+          hi = std::max(hi, y);
+        }
+    if (!std::isfinite(lo)) lo = -1, hi = 1;
+    if (hi <= lo) hi = lo + 1;
+    const double pad = 0.05 * (hi - lo);
+    s << "<div class=\"plots\">\n"
+      << svg_panel(fmt::format("before: residual without {} {}", f.effect, ax), f.plot.regressor,
+                   f.plot.x, f.plot.before_um, f.plot.group, lo - pad, hi + pad)
+      << "\n"
+      << svg_panel(fmt::format("after: residual with {} {}", f.effect, ax), f.plot.regressor,
+                   f.plot.x, f.plot.after_um, f.plot.group, lo - pad, hi + pad)
+      << "\n</div>\n";
+    if (!f.plot.group.empty())
+      s << "<p class=\"note\">red: approached from +, blue: approached from &minus;.</p>\n";
+  }
+  if (!r.notes.empty()) {
+    s << "<h2>Notes</h2>\n<ul>\n";
+    for (const std::string& n : r.notes) s << "<li>" << html_escape(n) << "</li>\n";
+    s << "</ul>\n";
+  }
+  s << "<p class=\"note\">Method: docs/explain.md. Before = final residual plus the finding's "
+       "fitted term; after = "
+       "final residual.</p>\n</body>\n</html>\n";
+  return s.str();
+}
+
+}  // namespace volmap

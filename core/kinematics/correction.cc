@@ -1,0 +1,132 @@
+#include "core/kinematics/correction.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/kinematics/jacobian.h"
+
+namespace volmap {
+
+std::string CorrectionOptions::invalid_reason() const {
+  if (max_iterations < 1)
+    return fmt::format("max_iterations is {}, must be at least 1", max_iterations);
+  if (!(tolerance_mm > 0) || !(tolerance_rad > 0)) return "tolerances must be positive";
+  if (!(singular_sin >= 0 && singular_sin < 1))
+    return fmt::format("singular_sin is {:g}, must be in [0, 1)", singular_sin);
+  return {};
+}
+
+namespace {
+
+// J^-1 at one axis position, block-triangular (see correction.h).
+class InverseJacobian {
+ public:
+  InverseJacobian(const Kinematics& kin, const PoseJacobian& J, double singular_sin) : kin_(kin) {
+    const Machine& m = kin.machine();
+    int k = 0;
+    for (int i = 0; i < m.axis_count(); ++i)
+      if (!is_rotary(m.axis_order[static_cast<size_t>(i)])) lin_[static_cast<size_t>(k++)] = i;
+    Eigen::Matrix3d Jl;
+    for (int c = 0; c < 3; ++c) Jl.col(c) = J.block<3, 1>(0, lin_[static_cast<size_t>(c)]);
+    Jl_inv_ = Jl.inverse();
+    if (!kin.has_rotary_axes()) return;
+    rot_ = {kin.outer_index(), kin.inner_index()};
+    for (int c = 0; c < 2; ++c) {
+      J_pr_.col(c) = J.block<3, 1>(0, rot_[static_cast<size_t>(c)]);
+      G_.col(c) = J.block<3, 1>(3, rot_[static_cast<size_t>(c)]);
+    }
+    // |dQ/dq_outer| = |w_outer x Q|: the sine of the angle between them.
+    singular_ = G_.col(0).norm() <= singular_sin;
+    if (singular_)
+      g_inner_ls_ = G_.col(1).transpose() / G_.col(1).squaredNorm();
+    else
+      N_inv_G_t_ = (G_.transpose() * G_).inverse() * G_.transpose();
+  }
+
+  bool singular() const { return singular_; }
+
+  // du with J du = b (least squares on the orientation rows).
+  void solve(const Eigen::Vector3d& bP, const Eigen::Vector3d& bQ, AxisVector& du) const {
+    Eigen::Vector2d dr = Eigen::Vector2d::Zero();
+    if (kin_.has_rotary_axes()) {
+      if (singular_)
+        dr[1] = g_inner_ls_ * bQ;
+      else
+        dr = N_inv_G_t_ * bQ;
+      du[rot_[0]] = dr[0];
+      du[rot_[1]] = dr[1];
+    }
+    const Eigen::Vector3d dl = Jl_inv_ * (bP - J_pr_ * dr);
+    for (int c = 0; c < 3; ++c) du[lin_[static_cast<size_t>(c)]] = dl[c];
+  }
+
+ private:
+  const Kinematics& kin_;
+  std::array<int, 3> lin_{};
+  std::array<int, 2> rot_{};
+  Eigen::Matrix3d Jl_inv_;
+  Eigen::Matrix<double, 3, 2> J_pr_ = Eigen::Matrix<double, 3, 2>::Zero();
+  Eigen::Matrix<double, 3, 2> G_ = Eigen::Matrix<double, 3, 2>::Zero();
+  Eigen::Matrix<double, 2, 3> N_inv_G_t_ = Eigen::Matrix<double, 2, 3>::Zero();
+  Eigen::Matrix<double, 1, 3> g_inner_ls_ = Eigen::Matrix<double, 1, 3>::Zero();
+  bool singular_ = false;
+};
+
+}  // namespace
+
+bool correction_step(const Kinematics& kin, const PoseJacobian& J_v_u, const Eigen::Vector3d& dP_mm,
+                     const Eigen::Vector3d& dQ, double singular_sin, AxisVector& du) {
+  const InverseJacobian Jinv(kin, J_v_u, singular_sin);
+  du = AxisVector::Zero(kin.machine().axis_count());
+  Jinv.solve(-dP_mm, -dQ, du);
+  return Jinv.singular();
+}
+
+CorrectionSolver::CorrectionSolver(const ErrorModel& model, CorrectionOptions options)
+    : model_(model), options_(options), kin_(model.machine()) {
+  if (const std::string why = options_.invalid_reason(); !why.empty())
+    throw std::invalid_argument("correction options: " + why);
+}
+
+CorrectionResult CorrectionSolver::correct(const AxisVector& u,
+                                           const ApproachDirections& dir) const {
+  PoseJacobian J;
+  nominal_forward_jacobian(kin_.machine(), u, J);
+  return correct(u, dir, J);
+}
+
+CorrectionResult CorrectionSolver::correct(const AxisVector& u, const ApproachDirections& dir,
+                                           const PoseJacobian& J) const {
+  const Machine& m = kin_.machine();
+  const InverseJacobian Jinv(kin_, J, options_.singular_sin);
+  CorrectionResult r;
+  r.singular = Jinv.singular();
+  r.du = AxisVector::Zero(m.axis_count());
+  // One step: J du = -dv (eq. 6 with dv = actual - nominal). The model
+  // carries the nominal pose v = F_f,n(u) along with the actual one.
+  ToolPose v;
+  const ToolPose a0 = model_.actual_and_nominal(u, dir, v);
+  Jinv.solve(-(a0.tip_mm - v.tip_mm), -(a0.axis - v.axis), r.du);
+  r.iterations = 1;
+  AxisVector step(m.axis_count());
+  while (r.iterations < options_.max_iterations) {
+    const ToolPose a = model_.actual(u + r.du, dir);
+    Jinv.solve(a.tip_mm - v.tip_mm, a.axis - v.axis, step);
+    r.du -= step;
+    ++r.iterations;
+    double lin = 0, rot = 0;
+    for (int i = 0; i < m.axis_count(); ++i)
+      (is_rotary(m.axis_order[static_cast<size_t>(i)]) ? rot : lin) += step[i] * step[i];
+    if (std::sqrt(lin) <= options_.tolerance_mm && std::sqrt(rot) <= options_.tolerance_rad) break;
+  }
+  if (options_.max_iterations > 1 || options_.residual) {
+    const ToolPose a = model_.actual(u + r.du, dir);
+    r.residual_mm = (a.tip_mm - v.tip_mm).norm();
+    r.residual_axis = (a.axis - v.axis).norm();
+  }
+  return r;
+}
+
+}  // namespace volmap

@@ -1,0 +1,654 @@
+#include "core/model/error_model.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/common/trig.h"
+
+namespace volmap {
+namespace {
+
+// sin and cos of a small angle: Taylor series to beyond double precision for
+// |x| < 1e-2 (next term x^9/9! < 3e-24), std::sin/cos otherwise.
+inline void small_sincos(double x, double& s, double& c) {
+  // Taylor series, Horner form with reciprocal constants, cut where the next
+  // term is below half an ulp: |x| < 1e-3 (every realistic geometric error):
+  // next terms x^7/7! < 2e-25 |x|-relative, x^6/6! < 1.4e-21;
+  // |x| < 1e-2: next terms x^9/9! < 3e-24, x^10/10! < 3e-27.
+  const double ax = std::abs(x), x2 = x * x;
+  if (ax < 1e-3) {
+    s = x * (1 - x2 * (1.0 / 6) * (1 - x2 * (1.0 / 20)));
+    c = 1 - x2 * 0.5 * (1 - x2 * (1.0 / 12));
+  } else if (ax < 1e-2) {
+    s = x * (1 - x2 * (1.0 / 6) * (1 - x2 * (1.0 / 20) * (1 - x2 * (1.0 / 42))));
+    c = 1 - x2 * 0.5 * (1 - x2 * (1.0 / 12) * (1 - x2 * (1.0 / 30) * (1 - x2 * (1.0 / 56))));
+  } else {
+    ::sincos(x, &s, &c);
+  }
+}
+
+inline Eigen::Vector3d to_vec(const std::array<double, 6>& e, int first) {
+  return {e[static_cast<size_t>(first)], e[static_cast<size_t>(first + 1)],
+          e[static_cast<size_t>(first + 2)]};
+}
+
+// Nominal location frames T_b_F (F = frame after Trans(offset), before the
+// location errors and motion) of every joint of a chain, and the chain end.
+void nominal_location_frames(const std::vector<Joint>& chain, const AxisVector& u,
+                             std::vector<Eigen::Isometry3d>& T_b_F, Eigen::Isometry3d& T_b_end) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T_b_F.clear();
+  for (const Joint& j : chain) {
+    T.translate(j.offset_parent_mm);
+    T_b_F.push_back(T);
+    const double q = u[j.index];
+    if (j.rotary)
+      T.rotate(axis_rotation(j.direction_parent, q));
+    else
+      T.translate(q * j.direction_parent);
+  }
+  T_b_end = T;
+}
+
+}  // namespace
+
+namespace {
+// sin and cos of the three small angles (ex, ey, ez) = (a, b, c).
+[[gnu::always_inline]] inline void small_sincos3(double ex, double ey, double ez, double& sa,
+                                                 double& ca, double& sb, double& cb, double& sc,
+                                                 double& cc) {
+  if (std::abs(ex) < 1e-3 && std::abs(ey) < 1e-3 && std::abs(ez) < 1e-3) {
+    // The common case, every angle in small_sincos's first range: the same
+    // series, two angles per packed operation (bit-identical results).
+    using v2d = double __attribute__((vector_size(16)));
+    const v2d x = {ex, ey}, x2 = x * x;
+    const v2d s = x * (1 - x2 * (1.0 / 6) * (1 - x2 * (1.0 / 20)));
+    const v2d c = 1 - x2 * 0.5 * (1 - x2 * (1.0 / 12));
+    sa = s[0], sb = s[1], ca = c[0], cb = c[1];
+    const double z = ez, z2 = z * z;
+    sc = z * (1 - z2 * (1.0 / 6) * (1 - z2 * (1.0 / 20)));
+    cc = 1 - z2 * 0.5 * (1 - z2 * (1.0 / 12));
+  } else {
+    small_sincos(ex, sa, ca);
+    small_sincos(ey, sb, cb);
+    small_sincos(ez, sc, cc);
+  }
+}
+
+// Rz(c) Ry(b) Rx(a) of the angles (ex, ey, ez), written element by element
+// so that it inlines into the hot loop; M is Eigen::Matrix3d or any type
+// with R(i, j).
+template <class M>
+[[gnu::always_inline]] inline void small_rotation_elements(double ex, double ey, double ez, M& R) {
+  double sa, ca, sb, cb, sc, cc;
+  small_sincos3(ex, ey, ez, sa, ca, sb, cb, sc, cc);
+  const double scsb = sc * sb, ccsb = cc * sb;
+  R(0, 0) = cc * cb;
+  R(0, 1) = ccsb * sa - sc * ca;
+  R(0, 2) = ccsb * ca + sc * sa;
+  R(1, 0) = sc * cb;
+  R(1, 1) = scsb * sa + cc * ca;
+  R(1, 2) = scsb * ca - cc * sa;
+  R(2, 0) = -sb;
+  R(2, 1) = cb * sa;
+  R(2, 2) = cb * ca;
+}
+[[gnu::always_inline]] inline void small_rotation_into(const Eigen::Vector3d& eps_rad,
+                                                       Eigen::Matrix3d& R) {
+  small_rotation_elements(eps_rad.x(), eps_rad.y(), eps_rad.z(), R);
+}
+}  // namespace
+
+Eigen::Matrix3d small_rotation_exact(const Eigen::Vector3d& eps_rad) {
+  Eigen::Matrix3d R;
+  small_rotation_into(eps_rad, R);
+  return R;
+}
+
+ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
+    : machine_(std::move(machine)), errors_(std::move(errors)), options_(options) {
+  prepare_lookup(errors_);
+  // Every axis the errors name must be an axis of the machine.
+  for (int a = 0; a < kAxisNameCount; ++a) {
+    if (errors_.axis[static_cast<size_t>(a)] && !machine_.index_of(static_cast<AxisName>(a)))
+      throw std::invalid_argument(
+          fmt::format("{}: the errors give axis {}, which machine \"{}\" does not have",
+                      errors_.file, axis_char(static_cast<AxisName>(a)), machine_.name));
+  }
+  for (const auto& [name, value] : errors_.location) {
+    const std::optional<ErrorName> n = parse_error_name(name);
+    if (!n || !machine_.index_of(n->axis))
+      throw std::invalid_argument(
+          fmt::format("{}: location error {} names an axis that machine \"{}\" does not have",
+                      errors_.file, name, machine_.name));
+  }
+
+  // The measurement levers use the tool of the measurement.
+  const double measured_tool_mm = std::isnan(machine_.measurement_tool_length_mm)
+                                      ? machine_.tool_length_mm
+                                      : machine_.measurement_tool_length_mm;
+  const Eigen::Vector3d tip_s = -measured_tool_mm * machine_.tool_axis;
+  auto bind = [&](const std::vector<Joint>& chain, ChainSide side, std::vector<BoundJoint>& out) {
+    for (const Joint& j : chain) {
+      BoundJoint bj;
+      bj.joint = &j;
+      bj.side = side;
+      bj.components = errors_.errors_of(j.axis);
+      for (int c = 0; c < kComponentCount; ++c) {
+        ErrorName n{static_cast<Component>(c), j.axis, true};
+        const double v = errors_.location_error(error_name_string(n));
+        if (c < 3)
+          bj.location.delta_mm[c] = v;
+        else
+          bj.location.eps_rad[c - 3] = v;
+      }
+      bj.independent = options_.formulation == Formulation::kIndependent && !j.rotary;
+      out.push_back(bj);
+    }
+  };
+  // Bind against the stored machine_ (the joints must outlive the model).
+  bind(machine_.workpiece_chain, ChainSide::kWorkpiece, workpiece_);
+  bind(machine_.tool_chain, ChainSide::kTool, tool_);
+  all_linear_ = workpiece_.size() + tool_.size() <= 6;
+  for (const auto* chain : {&workpiece_, &tool_})
+    for (const BoundJoint& bj : *chain) all_linear_ = all_linear_ && !bj.joint->rotary;
+
+  // Measurement levers of the independent formulation.
+  std::vector<Eigen::Isometry3d> frames;
+  Eigen::Isometry3d T_end;
+  auto levers = [&](std::vector<BoundJoint>& chain, const std::vector<Joint>& joints) {
+    for (size_t k = 0; k < chain.size(); ++k) {
+      BoundJoint& bj = chain[k];
+      if (!bj.independent) continue;
+      AxisVector pose = machine_.measured_at[static_cast<size_t>(bj.joint->index)];
+      pose[bj.joint->index] = 0.0;
+      const Eigen::Isometry3d T_b_s = nominal_base_to_spindle(machine_, pose);
+      const Eigen::Vector3d tip_b = T_b_s * tip_s;
+      nominal_location_frames(joints, pose, frames, T_end);
+      bj.r_meas_mm = frames[k].inverse(Eigen::Isometry) * tip_b;
+    }
+  };
+  levers(workpiece_, machine_.workpiece_chain);
+  levers(tool_, machine_.tool_chain);
+
+  // Constant part of each joint: Trans(offset) * L (exact), with the
+  // independent pivot folded into L's translation.
+  for (auto* chain : {&workpiece_, &tool_}) {
+    for (BoundJoint& bj : *chain) {
+      SmallTransform L = bj.location;
+      const Eigen::Matrix3d R_L = small_rotation_exact(L.eps_rad);
+      if (bj.independent) L.delta_mm -= (R_L - Eigen::Matrix3d::Identity()) * bj.r_meas_mm;
+      // Trans(offset) * L = [R_L | offset + delta_L]
+      bj.R_parent_loc = R_L;
+      bj.has_location_rotation = !L.eps_rad.isZero(0.0);
+      if (bj.joint->rotary)
+        for (int a = 0; a < 3; ++a)
+          if (bj.joint->direction_parent == Eigen::Vector3d::Unit(a)) bj.coordinate_axis = a;
+      bj.t_parent_loc_mm = bj.joint->offset_parent_mm + L.delta_mm;
+    }
+  }
+
+  // tip_error_linear's flat plan: the same numbers, copied.
+  if (all_linear_) {
+    const Eigen::Vector3d start =
+        machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis;
+    for (int i = 0; i < 3; ++i) {
+      linear_start_mm_[i] = start[i];
+      linear_origin_mm_[i] = machine_.workpiece_origin_mm[i];
+    }
+    int k = 0;
+    for (const auto* chain : {&workpiece_, &tool_}) {
+      for (const BoundJoint& bj : *chain) {
+        LinearJoint& J = linear_[static_cast<size_t>(k++)];
+        J.components = bj.components;
+        J.index = bj.joint->index;
+        J.workpiece = bj.side == ChainSide::kWorkpiece;
+        J.independent = bj.independent;
+        J.has_location_rotation = bj.has_location_rotation;
+        for (int i = 0; i < 3; ++i) {
+          J.direction[i] = bj.joint->direction_parent[i];
+          J.offset_mm[i] = bj.joint->offset_parent_mm[i];
+          J.t_loc_mm[i] = bj.t_parent_loc_mm[i];
+          J.r_meas_mm[i] = bj.r_meas_mm[i];
+          for (int j = 0; j < 3; ++j) J.R_loc[i][j] = bj.R_parent_loc(i, j);
+          J.R_loc_col01[i][0] = bj.R_parent_loc(0, i);
+          J.R_loc_col01[i][1] = bj.R_parent_loc(1, i);
+          J.r_meas_pair[i][0] = J.r_meas_pair[i][1] = bj.r_meas_mm[i];
+        }
+      }
+    }
+    linear_work_ = static_cast<int>(workpiece_.size());
+    linear_count_ = k;
+  }
+}
+
+SmallTransform ErrorModel::component_errors(const BoundJoint& bj, double q, int dir) const {
+  SmallTransform e;
+  if (!bj.components) return e;
+  std::array<double, kComponentCount> v;
+  std::uint64_t clamped = 0;
+  evaluate_axis(*bj.components, q, dir, options_.outside, v, &clamped);
+  if (clamped) clamped_->fetch_add(clamped, std::memory_order_relaxed);
+  e.delta_mm = to_vec(v, 0);
+  e.eps_rad = to_vec(v, 3);
+  return e;
+}
+
+namespace {
+// A point (lane 0) and a direction (lane 1) carried through the chain
+// together: c[i] = (p_i, q_i). One packed multiply serves both, and packed
+// IEEE operations round exactly as the scalar ones, so results do not depend
+// on the vector width (GCC/Clang vector extension; SSE2 on x86-64).
+using v2d = double __attribute__((vector_size(16)));
+struct PointDir {
+  v2d c[3];
+  PointDir(const Eigen::Vector3d& p, const Eigen::Vector3d& q)
+      : c{v2d{p.x(), q.x()}, v2d{p.y(), q.y()}, v2d{p.z(), q.z()}} {}
+  Eigen::Vector3d point() const { return {c[0][0], c[1][0], c[2][0]}; }
+  Eigen::Vector3d direction() const { return {c[0][1], c[1][1], c[2][1]}; }
+  // p <- R p, q <- R q (sums in the column order of Eigen's product).
+  [[gnu::always_inline]] void rotate(const Eigen::Matrix3d& R) {
+    const v2d a = c[0], b = c[1], d = c[2];
+    for (int i = 0; i < 3; ++i) c[i] = R(i, 0) * a + R(i, 1) * b + R(i, 2) * d;
+  }
+  // p <- R^T p, q <- R^T q.
+  [[gnu::always_inline]] void rotate_transposed(const Eigen::Matrix3d& R) {
+    const v2d a = c[0], b = c[1], d = c[2];
+    for (int i = 0; i < 3; ++i) c[i] = R(0, i) * a + R(1, i) * b + R(2, i) * d;
+  }
+  // p <- p + t; the direction takes + (-0.0) and - (+0.0), the exact
+  // identities of IEEE arithmetic (signed zeros included), so both lanes stay
+  // in one register.
+  [[gnu::always_inline]] void translate(const Eigen::Vector3d& t) {
+    for (int i = 0; i < 3; ++i) c[i] += v2d{t[i], -0.0};
+  }
+  [[gnu::always_inline]] void translate_back(const Eigen::Vector3d& t) {
+    for (int i = 0; i < 3; ++i) c[i] -= v2d{t[i], 0.0};
+  }
+};
+
+// Rotation about a rotary joint's line by an angle: a plane rotation when
+// the line is a coordinate axis (two coordinates mix), else the matrix.
+class AxisTurn {
+ public:
+  AxisTurn(int coordinate_axis, const Eigen::Vector3d& d, double angle_rad)
+      : axis_(coordinate_axis), i_((coordinate_axis + 1) % 3), k_((coordinate_axis + 2) % 3) {
+    sincos_axis(angle_rad, s_, c_);
+    if (axis_ < 0) R_ = axis_rotation(d, angle_rad);
+  }
+  [[gnu::always_inline]] void apply(PointDir& v) const {
+    if (axis_ < 0) {
+      v.rotate(R_);
+      return;
+    }
+    const v2d vi = v.c[i_], vk = v.c[k_];
+    v.c[i_] = c_ * vi - s_ * vk;
+    v.c[k_] = s_ * vi + c_ * vk;
+  }
+
+ private:
+  int axis_, i_, k_;  // the turn mixes coordinates i_ and k_
+  double c_ = 1, s_ = 0;
+  Eigen::Matrix3d R_;
+};
+}  // namespace
+
+[[gnu::always_inline]] inline void ErrorModel::joint_error(const BoundJoint& bj, double q, int dir,
+                                                           Eigen::Matrix3d& R,
+                                                           Eigen::Vector3d& delta,
+                                                           std::uint64_t& clamped) const {
+  if (!bj.components) {
+    R.setIdentity();
+    delta.setZero();
+    return;
+  }
+  std::array<double, kComponentCount> v;
+  evaluate_axis(*bj.components, q, dir, options_.outside, v, &clamped);
+  small_rotation_into(Eigen::Vector3d(v[3], v[4], v[5]), R);
+  delta = Eigen::Vector3d(v[0], v[1], v[2]);
+  if (bj.independent) {
+    const Eigen::Vector3d r = bj.side == ChainSide::kWorkpiece
+                                  ? Eigen::Vector3d(bj.r_meas_mm - q * bj.joint->direction_parent)
+                                  : bj.r_meas_mm;
+    delta -= R * r - r;
+  }
+}
+
+// The exact model as point and direction transformations, never matrix
+// products: the tool tip and tool axis are carried from the spindle down the
+// tool chain to the base (p_b = T_b_s p_s), then up the workpiece chain into
+// the workpiece frame (p_w = T_w_b p_b, applying each joint's inverse). This
+// is the same product of HTMs as eq. (7) of Lei & Hsu, evaluated right to
+// left on two vectors: a third of the work of 4x4 products. The nominal pose
+// is carried along in the same pass, sharing the rotary axes' sin and cos.
+void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir, ToolPose& actual_pose,
+                          ToolPose& nominal_pose) const {
+  // Phase 1: every joint's error transform E = [R_e | delta_e], independent
+  // of the others (the table lookups overlap in the pipeline instead of
+  // waiting on the chain).
+  constexpr int kMaxJoints = 6;
+  std::array<Eigen::Matrix3d, kMaxJoints> R_e;
+  std::array<Eigen::Vector3d, kMaxJoints> delta_e;
+  const int n_work = static_cast<int>(workpiece_.size());
+  const int n_tool = static_cast<int>(tool_.size());
+  std::uint64_t clamped = 0;
+  for (int k = 0; k < n_work + n_tool; ++k) {
+    const BoundJoint& bj =
+        k < n_work ? workpiece_[static_cast<size_t>(k)] : tool_[static_cast<size_t>(k - n_work)];
+    const int i = bj.joint->index;
+    joint_error(bj, u[i], dir[static_cast<size_t>(i)], R_e[static_cast<size_t>(k)],
+                delta_e[static_cast<size_t>(k)], clamped);
+  }
+  if (clamped) clamped_->fetch_add(clamped, std::memory_order_relaxed);
+
+  // Phase 2: tool chain, spindle to base: p <- T_parent_j p.
+  PointDir a(machine_.spindle_offset_mm - machine_.tool_length_mm * machine_.tool_axis,
+             machine_.tool_axis);
+  PointDir n = a;
+  for (int k = n_tool - 1; k >= 0; --k) {
+    const BoundJoint& bj = tool_[static_cast<size_t>(k)];
+    const Joint& j = *bj.joint;
+    const double q = u[j.index];
+    const Eigen::Matrix3d& R = R_e[static_cast<size_t>(n_work + k)];
+    const Eigen::Vector3d& delta = delta_e[static_cast<size_t>(n_work + k)];
+    if (j.rotary) {
+      const AxisTurn turn(bj.coordinate_axis, j.direction_parent, q);
+      turn.apply(n);
+      turn.apply(a);
+      a.rotate(R);  // E(q) Rot(d, q)
+      a.translate(delta);
+    } else {
+      n.translate(q * j.direction_parent);
+      a.rotate(R);  // Trans(q d) E(q)
+      a.translate(delta);
+      a.translate(q * j.direction_parent);
+    }
+    n.translate(j.offset_parent_mm);
+    if (bj.has_location_rotation) a.rotate(bj.R_parent_loc);
+    a.translate(bj.t_parent_loc_mm);
+  }
+  // Phase 3: workpiece chain, base to workpiece: p <- T_parent_j^-1 p.
+  for (int k = 0; k < n_work; ++k) {
+    const BoundJoint& bj = workpiece_[static_cast<size_t>(k)];
+    const Joint& j = *bj.joint;
+    const double q = u[j.index];
+    const Eigen::Matrix3d& R = R_e[static_cast<size_t>(k)];
+    const Eigen::Vector3d& delta = delta_e[static_cast<size_t>(k)];
+    n.translate_back(j.offset_parent_mm);
+    a.translate_back(bj.t_parent_loc_mm);
+    if (bj.has_location_rotation) a.rotate_transposed(bj.R_parent_loc);
+    if (j.rotary) {
+      const AxisTurn turn(bj.coordinate_axis, j.direction_parent, -q);
+      a.translate_back(delta);
+      a.rotate_transposed(R);
+      turn.apply(n);
+      turn.apply(a);
+    } else {
+      n.translate_back(q * j.direction_parent);
+      a.translate_back(delta);
+      a.translate_back(q * j.direction_parent);
+      a.rotate_transposed(R);
+    }
+  }
+  actual_pose.tip_mm = a.point() - machine_.workpiece_origin_mm;
+  actual_pose.axis = a.direction();
+  nominal_pose.tip_mm = n.point() - machine_.workpiece_origin_mm;
+  nominal_pose.axis = n.direction();
+}
+
+ToolPose ErrorModel::actual(const AxisVector& u, const ApproachDirections& dir) const {
+  ToolPose a, n;
+  evaluate(u, dir, a, n);
+  return a;
+}
+
+PoseError ErrorModel::exact(const AxisVector& u, const ApproachDirections& dir) const {
+  ToolPose a, n;
+  evaluate(u, dir, a, n);
+  return PoseError{a.tip_mm - n.tip_mm, a.axis - n.axis};
+}
+
+// evaluate() for linear joints only, on the tool tip alone: the same
+// operations in the same order (PointDir's lane 0, joint_error's arithmetic),
+// so the result is exact()'s to the bit (tests/model/error_model_test.cc checks it).
+// The joints' constants come from the flat plan linear_; each joint's error
+// rotation lives in registers, never in a Matrix3d array.
+namespace {
+// A 3x3 matrix as nine scalars (small_rotation_elements writes it).
+struct M33 {
+  double m[3][3];
+  [[gnu::always_inline]] double& operator()(int i, int j) { return m[i][j]; }
+  [[gnu::always_inline]] double operator()(int i, int j) const { return m[i][j]; }
+};
+
+using v2d = double __attribute__((vector_size(16)));
+using v2i = long long __attribute__((vector_size(16)));
+[[gnu::always_inline]] inline v2d load2(const double (&p)[2]) { return v2d{p[0], p[1]}; }
+
+// small_rotation_elements' matrix, rows 0 and 1 of each column packed:
+// c_j = {R(0, j), R(1, j)}, and row 2.
+struct PackedRotation {
+  v2d c0, c1, c2;
+  double r20, r21, r22;
+};
+[[gnu::always_inline]] inline void small_rotation_packed(double ex, double ey, double ez,
+                                                         PackedRotation& R) {
+  double sa, ca, sb, cb, sc, cc;
+  small_sincos3(ex, ey, ez, sa, ca, sb, cb, sc, cc);
+  const v2d C = {cc, sc}, S = {sc, cc};
+  const v2d T = C * sb;  // {ccsb, scsb}
+  // x - y is x + (-y) in IEEE arithmetic, signed zeros included: the sign
+  // bit flipped in one lane turns the lane's addition into the subtraction.
+  const v2i neg0 = {static_cast<long long>(0x8000000000000000ULL), 0};
+  const v2i neg1 = {0, static_cast<long long>(0x8000000000000000ULL)};
+  R.c0 = C * cb;  // cc cb, sc cb
+  R.c1 = T * sa + reinterpret_cast<v2d>(reinterpret_cast<v2i>(S * ca) ^
+                                        neg0);  // ccsb sa - sc ca, scsb sa + cc ca
+  R.c2 = T * ca + reinterpret_cast<v2d>(reinterpret_cast<v2i>(S * sa) ^
+                                        neg1);  // ccsb ca + sc sa, scsb ca - cc sa
+  R.r20 = -sb;
+  R.r21 = cb * sa;
+  R.r22 = cb * ca;
+}
+}  // namespace
+
+Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir,
+                                             std::uint64_t* clamped_out) const {
+  const int n_work = linear_work_;
+  const int n_all = linear_count_;
+  // Phase 1: the table lookups, in evaluate()'s order (the same exception
+  // first when several positions are outside).
+  std::array<std::array<double, kComponentCount>, kMaxLinearJoints> v;
+  std::uint64_t clamped = 0;
+  for (int k = 0; k < n_all; ++k) {
+    const LinearJoint& J = linear_[static_cast<size_t>(k)];
+    if (J.components)
+      evaluate_axis(*J.components, u[J.index], dir[static_cast<size_t>(J.index)], options_.outside,
+                    v[static_cast<size_t>(k)], &clamped);
+  }
+  if (clamped_out)
+    *clamped_out += clamped;
+  else if (clamped)
+    clamped_->fetch_add(clamped, std::memory_order_relaxed);
+
+  // joint_error(): E(q) = [R | delta], the independent pivot folded into
+  // delta (Eigen's R * r: rows 0 and 1 summed left to right as packets, row
+  // 2 as a scalar reduction, (a0 + (a1 + a2))).
+  auto joint_error = [&](const LinearJoint& J, const std::array<double, kComponentCount>& e,
+                         double q, M33& R, double(&delta)[3]) __attribute__((always_inline)) {
+    if (!J.components) {
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) R(i, j) = i == j ? 1.0 : 0.0;
+        delta[i] = 0.0;
+      }
+      return;
+    }
+    small_rotation_elements(e[3], e[4], e[5], R);
+    delta[0] = e[0], delta[1] = e[1], delta[2] = e[2];
+    if (J.independent) {
+      double r[3];
+      if (J.workpiece)
+        for (int i = 0; i < 3; ++i) r[i] = J.r_meas_mm[i] - q * J.direction[i];
+      else
+        for (int i = 0; i < 3; ++i) r[i] = J.r_meas_mm[i];
+      const double p0 = (R(0, 0) * r[0] + R(0, 1) * r[1]) + R(0, 2) * r[2];
+      const double p1 = (R(1, 0) * r[0] + R(1, 1) * r[1]) + R(1, 2) * r[2];
+      const double p2 = R(2, 0) * r[0] + (R(2, 1) * r[1] + R(2, 2) * r[2]);
+      delta[0] -= p0 - r[0];
+      delta[1] -= p1 - r[1];
+      delta[2] -= p2 - r[2];
+    }
+  };
+
+  // Tool chain, spindle to base, rows 0 and 1 of the tip in one register
+  // (packed IEEE operations round as the scalar ones), row 2 beside it.
+  v2d a01 = {linear_start_mm_[0], linear_start_mm_[1]}, n01 = a01;
+  double a2 = linear_start_mm_[2], n2 = a2;
+  for (int k = n_all - 1; k >= n_work; --k) {
+    const LinearJoint& J = linear_[static_cast<size_t>(k)];
+    const double q = u[J.index];
+    PackedRotation R;
+    v2d d01;
+    double d2;
+    if (J.components) {
+      const std::array<double, kComponentCount>& e = v[static_cast<size_t>(k)];
+      small_rotation_packed(e[3], e[4], e[5], R);
+      d01 = v2d{e[0], e[1]};
+      d2 = e[2];
+      if (J.independent) {  // tool chain: r = r_meas
+        const v2d r0 = load2(J.r_meas_pair[0]), r1 = load2(J.r_meas_pair[1]),
+                  r2 = load2(J.r_meas_pair[2]);
+        const v2d r01 = {J.r_meas_mm[0], J.r_meas_mm[1]};
+        // Eigen's R * r: rows 0 and 1 as packets, left to right; row 2 as
+        // a scalar reduction, a0 + (a1 + a2).
+        const v2d p01 = (R.c0 * r0 + R.c1 * r1) + R.c2 * r2;
+        const double p2 =
+            R.r20 * J.r_meas_mm[0] + (R.r21 * J.r_meas_mm[1] + R.r22 * J.r_meas_mm[2]);
+        d01 = d01 - (p01 - r01);
+        d2 = d2 - (p2 - J.r_meas_mm[2]);
+      }
+    } else {
+      R.c0 = v2d{1.0, 0.0}, R.c1 = v2d{0.0, 1.0}, R.c2 = v2d{0.0, 0.0};
+      R.r20 = 0.0, R.r21 = 0.0, R.r22 = 1.0;
+      d01 = v2d{0.0, 0.0};
+      d2 = 0.0;
+    }
+    const v2d m01 = q * v2d{J.direction[0], J.direction[1]};
+    const double m2 = q * J.direction[2];
+    n01 += m01;
+    n2 += m2;
+    {
+      const double x = a01[0], y = a01[1];
+      const v2d r01 = (R.c0 * x + R.c1 * y) + R.c2 * a2;
+      a2 = (R.r20 * x + R.r21 * y) + R.r22 * a2;
+      a01 = r01;
+    }
+    a01 += d01;
+    a2 += d2;
+    a01 += m01;
+    a2 += m2;
+    n01 += v2d{J.offset_mm[0], J.offset_mm[1]};
+    n2 += J.offset_mm[2];
+    if (J.has_location_rotation) {
+      const double x = a01[0], y = a01[1];
+      const v2d r01 = (load2(J.R_loc_col01[0]) * x + load2(J.R_loc_col01[1]) * y) +
+                      load2(J.R_loc_col01[2]) * a2;
+      a2 = (J.R_loc[2][0] * x + J.R_loc[2][1] * y) + J.R_loc[2][2] * a2;
+      a01 = r01;
+    }
+    a01 += v2d{J.t_loc_mm[0], J.t_loc_mm[1]};
+    a2 += J.t_loc_mm[2];
+  }
+  double a[3] = {a01[0], a01[1], a2}, n[3] = {n01[0], n01[1], n2};
+  // Workpiece chain, base to workpiece.
+  for (int k = 0; k < n_work; ++k) {
+    const LinearJoint& J = linear_[static_cast<size_t>(k)];
+    const double q = u[J.index];
+    M33 R;
+    double delta[3];
+    joint_error(J, v[static_cast<size_t>(k)], q, R, delta);
+    double motion[3];
+    for (int i = 0; i < 3; ++i) motion[i] = q * J.direction[i];
+    for (int i = 0; i < 3; ++i) n[i] -= J.offset_mm[i];
+    for (int i = 0; i < 3; ++i) a[i] -= J.t_loc_mm[i];
+    double r[3];
+    if (J.has_location_rotation) {
+      for (int i = 0; i < 3; ++i)
+        r[i] = J.R_loc[0][i] * a[0] + J.R_loc[1][i] * a[1] + J.R_loc[2][i] * a[2];
+      for (int i = 0; i < 3; ++i) a[i] = r[i];
+    }
+    for (int i = 0; i < 3; ++i) n[i] -= motion[i];
+    for (int i = 0; i < 3; ++i) a[i] -= delta[i];
+    for (int i = 0; i < 3; ++i) a[i] -= motion[i];
+    for (int i = 0; i < 3; ++i) r[i] = R(0, i) * a[0] + R(1, i) * a[1] + R(2, i) * a[2];
+    for (int i = 0; i < 3; ++i) a[i] = r[i];
+  }
+  return {(a[0] - linear_origin_mm_[0]) - (n[0] - linear_origin_mm_[0]),
+          (a[1] - linear_origin_mm_[1]) - (n[1] - linear_origin_mm_[1]),
+          (a[2] - linear_origin_mm_[2]) - (n[2] - linear_origin_mm_[2])};
+}
+
+void ErrorModel::levers(const AxisVector& u, std::vector<JointLever>& out) const {
+  out.clear();
+  const Eigen::Isometry3d T_b_w = nominal_base_to_workpiece(machine_, u);
+  const Eigen::Isometry3d T_b_s = nominal_base_to_spindle(machine_, u);
+  const Eigen::Vector3d tip_b = T_b_s * (-machine_.tool_length_mm * machine_.tool_axis);
+  const Eigen::Vector3d axis_b = T_b_s.linear() * machine_.tool_axis;
+  const Eigen::Matrix3d R_w_b = T_b_w.linear().transpose();
+  std::vector<Eigen::Isometry3d> frames;
+  Eigen::Isometry3d T_end;
+  auto add = [&](const std::vector<BoundJoint>& chain, const std::vector<Joint>& joints,
+                 double sign) {
+    nominal_location_frames(joints, u, frames, T_end);
+    for (size_t k = 0; k < chain.size(); ++k) {
+      const BoundJoint& bj = chain[k];
+      const Joint& j = *bj.joint;
+      const double q = u[j.index];
+      const Eigen::Isometry3d T_L_b = frames[k].inverse(Eigen::Isometry);
+      JointLever L{j.axis,
+                   j.rotary,
+                   sign,
+                   R_w_b * frames[k].linear(),
+                   T_L_b * tip_b,
+                   Eigen::Vector3d::Zero(),
+                   T_L_b.linear() * axis_b};
+      // Component frame C: L moved by the linear motion, or L itself for a
+      // rotary joint (its errors live in the non-rotating frame).
+      L.lever_component_mm = L.lever_location_mm;
+      if (!j.rotary) L.lever_component_mm -= q * j.direction_parent;
+      if (bj.independent) {
+        L.lever_location_mm -= bj.r_meas_mm;
+        L.lever_component_mm -= bj.side == ChainSide::kWorkpiece
+                                    ? Eigen::Vector3d(bj.r_meas_mm - q * j.direction_parent)
+                                    : bj.r_meas_mm;
+      }
+      out.push_back(L);
+    }
+  };
+  add(workpiece_, machine_.workpiece_chain, -1.0);
+  add(tool_, machine_.tool_chain, +1.0);
+}
+
+PoseError ErrorModel::first_order(const AxisVector& u, const ApproachDirections& dir) const {
+  std::vector<JointLever> lv;
+  levers(u, lv);
+  PoseError dv;
+  size_t k = 0;
+  for (const auto* chain : {&workpiece_, &tool_}) {
+    for (const BoundJoint& bj : *chain) {
+      const JointLever& L = lv[k++];
+      const int i = bj.joint->index;
+      const SmallTransform e = component_errors(bj, u[i], dir[static_cast<size_t>(i)]);
+      const SmallTransform& loc = bj.location;
+      dv.dP_mm += L.sign * L.R_w_L *
+                  (loc.delta_mm + loc.eps_rad.cross(L.lever_location_mm) + e.delta_mm +
+                   e.eps_rad.cross(L.lever_component_mm));
+      dv.dQ += L.sign * L.R_w_L * (loc.eps_rad + e.eps_rad).cross(L.axis_L);
+    }
+  }
+  return dv;
+}
+
+}  // namespace volmap

@@ -1,0 +1,132 @@
+// Reading five-axis tool paths: the three input forms of the five-axis
+// post-processor (docs/post-five-axis.md), one line at a time, into nominal
+// moves of the tool pose in workpiece coordinates.
+//
+//  - kTcp: RS274NGC with X Y Z the tool tip in workpiece coordinates and the
+//    machine's rotary axis words (A C for X'Y'ZA'C') as angles in degrees:
+//    LinuxCNC's TCP mode (M428 ... M429), Heidenhain M128, Siemens TRAORI
+//    with rotary words. The nominal path: the tip moves along the programmed
+//    line or arc, the rotary angles linearly with it.
+//  - kToolVector: X Y Z tip plus the tool axis as I J K (or Siemens
+//    A3= B3= C3=), unit or not (normalised), from the tip into the spindle.
+//    The nominal path: the tip along the line, the axis along the great
+//    circle (slerp).
+//  - kApt: APT / CLDATA, GOTO/x,y,z[,i,j,k], FEDRAT/, RAPID, UNITS/,
+//    `$` continuation lines; every other statement becomes a comment.
+//  - kMachineAxes: RS274NGC of machine axis values (what the post writes):
+//    verify reads compensated programs in this form.
+//
+// Frames and units: tips in the workpiece frame w of the machine (its origin
+// is Machine::workpiece_origin_mm, which --part-origin sets), mm; angles rad;
+// feeds mm/min (G94) or 1/min (G93). Program units are converted here.
+//
+// Accepted G codes: G0 G1 G2 G3 (I J K centre, XY/ZX/YZ planes), G17-G19,
+// G20 G21, G90 G91, G90.1 G91.1, G93 G94, G40 G49 G80, G54, G61 G61.1 G64,
+// G4. Refused with file:line:column: everything else (G43 tool length: the
+// machine file's tool is the one; other work offsets: one part origin).
+// M428/M429/M430 (LinuxCNC's kinematics switches) are marked for stripping.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <deque>
+#include <istream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/model/machine.h"
+#include "gcode/nc_block.h"
+#include "gcode/nc_interpreter.h"
+
+namespace volmap::post {
+
+enum class InputForm { kAuto, kTcp, kToolVector, kApt, kMachineAxes };
+
+/// "auto", "tcp", "vector", "apt", "axes".
+std::optional<InputForm> parse_input_form(const std::string& name);
+const char* input_form_name(InputForm form);
+
+/// The form of a program from its first lines: kApt when a statement is an
+/// APT keyword with a slash (GOTO/, FEDRAT/, PARTNO ...); kToolVector when
+/// a G0/G1 block has I, J or K, or A3=/B3=/C3= appear; else kTcp.
+InputForm detect_input_form(const std::vector<std::string>& lines);
+
+/// One nominal move.
+struct FiveAxisMove {
+  bool rapid = false;
+  /// Tip path in the workpiece frame, mm (kLinear or kArc; kMachineAxes:
+  /// the linear axis values instead).
+  nc::Motion tip;
+  /// Orientation by angles (kTcp, kMachineAxes: rotary entries of q0, q1,
+  /// rad, AxisVector order, linear entries 0) or by tool axes (a0, a1).
+  bool by_angles = true;
+  AxisVector q0, q1;
+  Eigen::Vector3d a0 = Eigen::Vector3d::UnitZ(), a1 = Eigen::Vector3d::UnitZ();
+  int feed_mode = 940;  ///< 930 inverse time, 940 per minute
+  double feed = 0.0;    ///< mm/min (940) or 1/min (930)
+};
+
+/// One line of the input.
+struct FiveAxisLine {
+  int line = 0;
+  nc::Block block;         ///< G-code forms: the lexed line
+  bool synthetic = false;  ///< APT: no G-code line; `text` replaces it
+  std::string text;        ///< APT: the G-code line for a non-move statement
+  bool has_move = false;
+  FiveAxisMove move;
+  std::vector<int> strip;     ///< words to drop (M428 M429 M430)
+  double unit_mm = 1.0;       ///< units after the line (25.4 under G20)
+  int motion_code = -1;       ///< motion G code x10 written in the line (-1 none)
+  bool ends_program = false;  ///< M2 / M30
+};
+
+/// Where the tool stands before the program commands it: the tip in
+/// program coordinates (mm), the rotary angles (rad, AxisVector order), the
+/// tool axis (vector forms). Default: tip at the program origin, rotary axes
+/// at home, axis +Z.
+struct InitialPose {
+  Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();
+  AxisVector q;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+};
+
+class FiveAxisReader {
+ public:
+  /// `form` kAuto: detected from the first 2000 lines (buffered).
+  FiveAxisReader(std::istream& in, std::string file, const Machine& machine, InputForm form,
+                 const InitialPose& initial);
+  /// The next line; false at the end. Throws InputError with file:line.
+  bool next(FiveAxisLine& out);
+  InputForm form() const { return form_; }
+  /// Whether the last line read ended with a newline (kept on output).
+  bool newline() const { return newline_; }
+  const std::string& line_ending() const { return line_ending_; }
+
+ private:
+  bool read_raw(std::string& text);
+  void gcode_line(const std::string& text, FiveAxisLine& out);
+  void apt_line(std::string text, FiveAxisLine& out);
+  [[noreturn]] void fail(int column, const std::string& msg) const;
+
+  std::istream& in_;
+  std::string file_;
+  const Machine& machine_;
+  InputForm form_;
+  std::deque<std::string> buffered_;
+  int line_ = 0;
+  bool newline_ = true;
+  std::string line_ending_ = "\n";
+
+  // Modal state (program).
+  double unit_mm_ = 1.0;
+  bool absolute_ = true, arc_absolute_ = false;
+  int plane_ = 0, motion_ = 0, feed_mode_ = 940;
+  double feed_ = 0.0;
+  Eigen::Vector3d tip_mm_ = Eigen::Vector3d::Zero();
+  AxisVector q_;
+  Eigen::Vector3d axis_ = Eigen::Vector3d::UnitZ();
+  bool apt_rapid_ = false;
+};
+
+}  // namespace volmap::post

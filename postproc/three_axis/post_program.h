@@ -1,0 +1,80 @@
+// volmap post, three-axis: rewrites an NC program written for the ideal
+// machine so that the real machine (its error model) cuts the nominal
+// geometry.
+//
+// Policy (docs/post.md):
+//  - every commanded point moves to the solution of x_cmd + e(x_cmd) = x_nom
+//    (Corrector), in the frame and units of the program (G20/G21, G90/G91,
+//    G53, G54-G59.3, tool length from G43);
+//  - feed moves (G1) are split until the actual path stays within the
+//    tolerance of the nominal line: on straight pieces by a bound of the
+//    deviation along the whole piece (Corrector::chord_deviation_bound),
+//    where that bound is too large by samples at 1/4, 1/2, 3/4 of the piece;
+//    arcs (G2/G3, helices, full circles) are linearised the same way, with
+//    the chord error inside the same tolerance; under G93 every piece gets
+//    its inverse-time F so the programmed time is kept;
+//  - rapid moves (G0) are corrected at their end point only (not cutting);
+//    a rapid before X, Y and Z are all known passes unchanged;
+//  - canned cycles: the hole position and depth (X, Y, Z at the bottom) and
+//    the R plane are corrected; every cycle block then states Z and R;
+//  - lines that need no change are written byte for byte; a changed line
+//    keeps its other words in their order; added lines follow it.
+// Streaming, constant memory: one block at a time.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+
+#include "core/model/error_model.h"
+#include "gcode/nc_interpreter.h"
+
+namespace volmap::maps {
+struct VolumetricTable;
+}
+
+namespace volmap::post {
+
+struct PostOptions {
+  double tolerance_mm = 1e-3;
+  int decimals = -1;  ///< -1: 4 for mm blocks, 5 for inch blocks
+  OutsidePolicy outside = OutsidePolicy::kError;
+  /// Canned cycles G81 G82 G85 G89 written out as their moves (G0, G1
+  /// segmented like any feed move, G4), so that the feed into the hole (and
+  /// out of it for G85 G89) keeps the tolerance too, not only the hole's
+  /// bottom. Other cycles (pecking, spindle stops) are refused with it.
+  bool expand_cycles = false;
+  /// Arcs and helices (G2 G3) stay arcs where the error field allows: the
+  /// end point corrected, the centre moved by the mean correction of its
+  /// ends, the arc the controller then runs checked against the nominal
+  /// one (docs/post.md "Arcs kept as arcs"); others are linearised within
+  /// the tolerance as by default.
+  bool keep_arcs = false;
+  /// Plain lines of axis words take the post's shortcut past the lexer's
+  /// Block, the interpreter's checks and the line editor (docs/post.md
+  /// "Speed"); the output is the same byte for byte. false: every line the
+  /// general way (the tests compare both).
+  bool shortcuts = true;
+};
+
+struct PostReport {
+  std::uint64_t lines = 0;
+  std::uint64_t lines_changed = 0;
+  std::uint64_t lines_added = 0;
+  std::uint64_t points_corrected = 0;
+  double max_correction_mm = 0.0;
+};
+
+PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
+                        const Machine& machine, const ErrorSet& errors,
+                        const nc::ProgramSetup& setup, const PostOptions& options);
+/// The same from a three-axis compensation table (volmap map) instead of
+/// the errors: the table's interpolated tool-tip error stands for the model
+/// (Corrector's table form). Programs that change the tool length (G43 with
+/// another tool) are refused at that line: the table holds the errors of the
+/// machine file's tool only.
+PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,
+                        const Machine& machine, const maps::VolumetricTable& table,
+                        const nc::ProgramSetup& setup, const PostOptions& options);
+
+}  // namespace volmap::post

@@ -1,0 +1,196 @@
+#include "postproc/verify/verify.h"
+
+#include <algorithm>
+#include <cmath>
+#include <istream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/common/input_error.h"
+#include "gcode/nc_path.h"
+#include "postproc/three_axis/corrector.h"
+
+namespace volmap::post {
+namespace {
+
+using Eigen::Vector3d;
+
+struct FeedMove {
+  nc::Motion motion;  ///< cycles reduced to their feed-in: R plane to bottom
+  double tool_length_mm;
+  int line;
+  bool measured;  ///< false for rapids: they move the axes (and take up
+                  ///< lost motion) but are not cutting
+};
+
+// Feed moves of a program, as the interpreter sees them.
+std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
+                                 const nc::ProgramSetup& setup, double default_tool_mm) {
+  nc::Interpreter interp(setup, name);
+  std::vector<FeedMove> out;
+  std::string text;
+  int number = 0;
+  nc::BlockEffect fx;
+  while (std::getline(in, text)) {
+    ++number;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    const nc::Block b = nc::lex_block(text, number, name);
+    interp.execute(b, fx);
+    if (!fx.has_motion) continue;
+    // The machine file's tool (offset zero) plus the active tool length offset.
+    const double L = default_tool_mm + interp.state().tool_length_mm;
+    nc::Motion m = fx.motion;
+    if (m.kind == nc::MotionKind::kRapid) {
+      // Before X, Y and Z are all known the start is a guess: skip.
+      if (interp.state().position_known) out.push_back({m, L, number, false});
+      continue;
+    }
+    if (m.kind == nc::MotionKind::kCycle) {
+      // Every hole (L repeats): rapid over it, down to R, then the feed to
+      // the bottom and back to the clearance level.
+      for (size_t k = 0; k <= fx.more_holes.size(); ++k) {
+        nc::Motion h = k == 0 ? m : fx.more_holes[k - 1];
+        nc::Motion over = h;
+        over.kind = nc::MotionKind::kRapid;
+        over.end_mm = Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm);
+        out.push_back({over, L, number, false});
+        h.start_mm = over.end_mm;
+        h.kind = nc::MotionKind::kLinear;
+        out.push_back({h, L, number, true});
+        nc::Motion back = h;
+        back.kind = nc::MotionKind::kRapid;
+        back.start_mm = h.end_mm;
+        back.end_mm = Vector3d(h.end_mm.x(), h.end_mm.y(), h.clear_mm);
+        out.push_back({back, L, number, false});
+      }
+      continue;
+    }
+    out.push_back({m, L, number, true});
+  }
+  return out;
+}
+
+class Run {
+ public:
+  Run(const Machine& machine, const ErrorSet& errors, OutsidePolicy outside)
+      : machine_(machine), errors_(errors), outside_(outside) {}
+  const Corrector& corrector(double L) {
+    auto it = correctors_.find(L);
+    if (it == correctors_.end())
+      it =
+          correctors_.emplace(L, std::make_unique<Corrector>(machine_, errors_, L, outside_)).first;
+    return *it->second;
+  }
+
+ private:
+  const Machine& machine_;
+  const ErrorSet& errors_;
+  OutsidePolicy outside_;
+  std::map<double, std::unique_ptr<Corrector>> correctors_;
+};
+
+DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
+                             const std::vector<FeedMove>& nominal, Run& run, double step_mm,
+                             const std::string& name, int& line);
+
+// As measure_moves; an error table left (std::out_of_range from the model,
+// naming the table) is reported at the program's line, and a move too long
+// to sample is refused there.
+DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector<FeedMove>& nominal,
+                       Run& run, double step_mm, const std::string& name) {
+  int line = 0;
+  try {
+    return measure_moves(commanded, nominal, run, step_mm, name, line);
+  } catch (const std::out_of_range& e) {
+    throw InputError(name, line,
+                     std::string("this block leaves the error tables: ") + e.what() +
+                         " (volmap verify --clamp holds the end values)");
+  }
+}
+
+DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
+                             const std::vector<FeedMove>& nominal, Run& run, double step_mm,
+                             const std::string& name, int& line) {
+  DeviationStats st;
+  double sum2 = 0;
+  size_t cursor = 0;
+  // Lost motion as play: each axis's hysteresis state, -1 .. +1 (0: unknown
+  // at the start, the mean of both directions).
+  Vector3d h = Vector3d::Zero();
+  Vector3d previous = commanded.empty() ? Vector3d::Zero() : commanded.front().motion.start_mm;
+  double path_mm = 0.0;  // travel of the measured moves so far
+  for (const FeedMove& fm : commanded) {
+    const Corrector& c = run.corrector(fm.tool_length_mm);
+    const nc::Motion& m = fm.motion;
+    line = fm.line;
+    const double len = nc::path_length_mm(m);
+    const double samples = std::ceil(len / step_mm);
+    if (!(samples <= 1e8))  // also NaN: never cast to int out of range
+      throw InputError(name, fm.line,
+                       "this move is too long to sample (" + std::to_string(len) +
+                           " mm); check its coordinates");
+    const int n = std::max(8, static_cast<int>(samples));
+    if (fm.measured) path_mm += len;
+    for (int k = 0; k <= n; ++k) {
+      const Vector3d x = nc::point_on(m, static_cast<double>(k) / n);
+      for (int a = 0; a < 3; ++a) {
+        const double step = x[a] - previous[a];
+        if (step == 0.0 || !c.bidirectional(a)) continue;
+        const double w = c.play_width_mm(a, x);
+        h[a] = w < 1e-9 ? (step > 0 ? 1.0 : -1.0) : std::clamp(h[a] + 2.0 * step / w, -1.0, 1.0);
+      }
+      previous = x;
+      if (!fm.measured) continue;
+      const Vector3d actual = x + c.error_with_play(x, h);
+      // Nearest nominal move around the cursor.
+      double best = std::numeric_limits<double>::infinity();
+      size_t best_i = cursor;
+      const size_t lo = cursor > 2 ? cursor - 2 : 0;
+      const size_t hi = std::min(nominal.size(), cursor + 4);
+      for (size_t i = lo; i < hi; ++i) {
+        const double dist = nc::distance_to_path(nominal[i].motion, actual);
+        if (dist < best) {
+          best = dist;
+          best_i = i;
+        }
+      }
+      cursor = best_i;
+      if (!std::isfinite(best)) continue;
+      sum2 += best * best;
+      ++st.samples;
+      st.profile.add(path_mm - len + len * k / n, best * 1e3, 0.0, fm.line);
+      if (best * 1e3 > st.max_um) {
+        st.max_um = best * 1e3;
+        st.worst_line = fm.line;
+      }
+    }
+  }
+  st.rms_um = st.samples ? std::sqrt(sum2 / static_cast<double>(st.samples)) * 1e3 : 0.0;
+  return st;
+}
+
+}  // namespace
+
+VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_name,
+                             std::istream& compensated, const std::string& compensated_name,
+                             const Machine& machine, const ErrorSet& errors,
+                             const nc::ProgramSetup& setup, const VerifyOptions& options) {
+  const std::vector<FeedMove> nom =
+      feed_moves(nominal, nominal_name, setup, machine.tool_length_mm);
+  const std::vector<FeedMove> out =
+      feed_moves(compensated, compensated_name, setup, machine.tool_length_mm);
+  Run run(machine, errors, options.outside);
+  VerifyResult r;
+  std::vector<FeedMove> nominal_path;
+  for (const FeedMove& f : nom)
+    if (f.measured) nominal_path.push_back(f);
+  r.before = measure(nom, nominal_path, run, options.sample_step_mm, nominal_name);
+  r.after = measure(out, nominal_path, run, options.sample_step_mm, compensated_name);
+  return r;
+}
+
+}  // namespace volmap::post

@@ -1,0 +1,119 @@
+// The volmap executable as scripts call it: exit status, one-line errors,
+// JSON output of `sensitivity` (spec: shared/spec/cli.md).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/support/cli_run.h"
+#include "tests/support/test_paths.h"
+
+namespace {
+
+using Result = volmap::test::CliResult;
+
+Result run(const std::string& args) { return volmap::test::run_volmap(args); }
+
+std::string sample(const std::string& rel) { return volmap::test::source_path("samples/" + rel); }
+
+TEST(Cli, SensitivityJsonHasTheContractKeys) {
+  const Result r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") +
+                       " --at 250,200,150 --model dependent --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["model"], "dependent");
+  EXPECT_EQ(doc["at"]["X"], 250.0);
+  EXPECT_EQ(doc["gains"].size(), 21u);
+  for (const char* k : {"dx", "dy", "dz", "di", "dj", "dk"})
+    EXPECT_TRUE(doc["gains"]["EC0X"].contains(k));
+  // Table I, COX: dy = Xz + Xm = 0 + 250 for the sample (Xz = 0).
+  EXPECT_NEAR(doc["gains"]["EC0X"]["dy"].get<double>(), 250.0, 1e-9);
+  EXPECT_NEAR(doc["gains"]["EC0X"]["dx"].get<double>(), 180.0, 1e-9);  // -Yz, Yz = -180
+}
+
+TEST(Cli, SensitivityFiveAxisDefaultsToIndependent) {
+  const Result r = run("sensitivity --machine " + sample("machines/lei-hsu-xyzac.json") +
+                       " --at 10,20,30,-45,30 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["model"], "independent");
+  EXPECT_NEAR(doc["at"]["A"].get<double>(), -45.0, 1e-12);
+  EXPECT_TRUE(doc["gains"].contains("EX0C"));
+  EXPECT_TRUE(doc["gains"].contains("EY0A"));
+  EXPECT_TRUE(doc["gains"].contains("ECC"));
+}
+
+TEST(Cli, HumanTableOnStdout) {
+  const Result r =
+      run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 0,0,0");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("EB0Z"), std::string::npos);
+  EXPECT_NE(r.out.find("Table II"), std::string::npos);
+}
+
+TEST(Cli, UsageErrorsExitTwo) {
+  EXPECT_EQ(run("").status, 2);
+  EXPECT_EQ(run("sensitivity --at 1,2,3").status, 2);
+  EXPECT_EQ(run("frobnicate").status, 2);
+  EXPECT_EQ(run("sensitivity --machine x --at 1,2,3 --model sideways").status, 2);
+}
+
+TEST(Cli, BadInputExitsOneWithOneLine) {
+  Result r = run("sensitivity --machine /nonexistent.json --at 1,2,3");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("/nonexistent.json"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+
+  // A value the option cannot take is a usage error (cli.md: status 2),
+  // still one line that says what is wrong.
+  r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 1,2");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("expected 3 values (X,Y,Z)"), std::string::npos) << r.err;
+
+  r = run("sensitivity --machine " + sample("machines/hsu-3axis.json") + " --at 900,0,0");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("outside the travel"), std::string::npos) << r.err;
+}
+
+TEST(Cli, HelpEndsWithAnExample) {
+  const Result r = run("sensitivity --help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("Example:"), std::string::npos);
+}
+
+}  // namespace
+
+// cli.md writes `volmap export --table T --format FORMAT -o DIR`: formats
+// that export the component errors themselves (isg-csv) read them from the
+// errors file the table names when --errors is not given, with the same
+// result as giving it.
+TEST(Cli, ExportReadsTheErrorsFileTheTableNames) {
+  const std::string dir = ::testing::TempDir() + "cli_test_export_" + std::to_string(getpid());
+  const std::string table = dir + ".vmt";
+  ASSERT_EQ(run("map --machine " + sample("machines/hsu-3axis.json") + " --errors " +
+                sample("errors/hsu-3axis.csv") + " --spacing 50,50,50 -o " + table)
+                .status,
+            0);
+  const Result implicit = run("export --table " + table + " --format isg-csv -o " + dir + "-a");
+  ASSERT_EQ(implicit.status, 0) << implicit.err;
+  const Result given = run("export --table " + table + " --format isg-csv --errors " +
+                           sample("errors/hsu-3axis.csv") + " -o " + dir + "-b");
+  ASSERT_EQ(given.status, 0) << given.err;
+  auto slurp = [](const std::string& p) {
+    std::string s;
+    if (FILE* f = std::fopen(p.c_str(), "rb")) {
+      std::array<char, 4096> b;
+      size_t n;
+      while ((n = std::fread(b.data(), 1, b.size(), f)) > 0) s.append(b.data(), n);
+      std::fclose(f);
+    }
+    return s;
+  };
+  const std::string a = slurp(dir + "-a/isg_errors.csv"), b = slurp(dir + "-b/isg_errors.csv");
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, b);
+}
