@@ -1,5 +1,5 @@
 // Subcommands of the volmap executable. Each subcommand lives in its own
-// file under core/cli/ and registers itself with a static
+// file under cli/ and registers itself with a static
 // CommandRegistration; main() adds them in `order` (the order of --help).
 #pragma once
 
