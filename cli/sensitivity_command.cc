@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/parse_util.h"
+#include "core/common/units.h"
 #include "core/model/errors_csv.h"
 #include "core/model/machine_json.h"
 #include "core/model/sensitivity.h"
@@ -56,9 +57,11 @@ Runner register_sensitivity(CLI::App& app) {
       model.emplace(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
       values = error_values(m, model->errors(), u, OutsidePolicy::kError);
     }
-    auto display_value = [](const ErrorGain& g, double v) { return v * (g.angular ? 1e6 : 1e3); };
+    auto display_value = [](const ErrorGain& g, double v) {
+      return v * (g.angular ? units::kUradPerRad : units::kUmPerMm);
+    };
     auto contribution_um = [&](size_t k) -> Eigen::Vector3d {
-      return gains[k].dP * values[k] * 1e3;
+      return gains[k].dP * values[k] * units::kUmPerMm;
     };
     auto um3 = [&](const Eigen::Vector3d& v) {
       return nlohmann::ordered_json::array({clean(v.x()), clean(v.y()), clean(v.z())});
@@ -90,9 +93,9 @@ Runner register_sensitivity(CLI::App& app) {
         const PoseError fo = model->first_order(u), ex = model->exact(u);
         doc["errors"] = {{"file", o->errors},
                          {"contributions", c},
-                         {"first_order_um", um3(fo.dP_mm * 1e3)},
-                         {"exact_um", um3(ex.dP_mm * 1e3)},
-                         {"exact_axis_urad", um3(ex.dQ * 1e6)}};
+                         {"first_order_um", um3(fo.dP_mm * units::kUmPerMm)},
+                         {"exact_um", um3(ex.dP_mm * units::kUmPerMm)},
+                         {"exact_axis_urad", um3(ex.dQ * units::kUradPerRad)}};
       }
       std::cout << doc.dump(2) << "\n";
       return 0;
@@ -129,10 +132,11 @@ Runner register_sensitivity(CLI::App& app) {
           "  tool axis    di {:8.3f} ur  dj {:8.3f} ur  dk {:8.3f} ur\n"
           "(value: um for translational errors, ur = urad for angular ones; mean of both\n"
           " directions for bidirectional tables)\n",
-          o->at, clean(fo.dP_mm.x() * 1e3), clean(fo.dP_mm.y() * 1e3), clean(fo.dP_mm.z() * 1e3),
-          clean(ex.dP_mm.x() * 1e3), clean(ex.dP_mm.y() * 1e3), clean(ex.dP_mm.z() * 1e3),
-          ex.dP_mm.norm() * 1e3, clean(ex.dQ.x() * 1e6), clean(ex.dQ.y() * 1e6),
-          clean(ex.dQ.z() * 1e6));
+          o->at, clean(fo.dP_mm.x() * units::kUmPerMm), clean(fo.dP_mm.y() * units::kUmPerMm),
+          clean(fo.dP_mm.z() * units::kUmPerMm), clean(ex.dP_mm.x() * units::kUmPerMm),
+          clean(ex.dP_mm.y() * units::kUmPerMm), clean(ex.dP_mm.z() * units::kUmPerMm),
+          ex.dP_mm.norm() * units::kUmPerMm, clean(ex.dQ.x() * units::kUradPerRad),
+          clean(ex.dQ.y() * units::kUradPerRad), clean(ex.dQ.z() * units::kUradPerRad));
     }
     return 0;
   };
