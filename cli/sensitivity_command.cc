@@ -51,35 +51,30 @@ struct SensitivityResult {
 /// --json: one document with the gains and, with --errors, each error's
 /// value and contribution and the total.
 void print_sensitivity_json(const SensitivityOptions& o, const SensitivityResult& r) {
-  const Machine& m = r.machine;
-  const AxisVector& u = r.u;
-  const std::vector<ErrorGain>& gains = r.gains;
-  const std::optional<ErrorModel>& model = r.model;
-  const std::vector<double>& values = r.values;
   nlohmann::ordered_json doc;
   doc["model"] = o.model;
   nlohmann::ordered_json at = nlohmann::ordered_json::object();
-  for (int i = 0; i < m.axis_count(); ++i) {
-    const AxisName a = m.axis_order[static_cast<size_t>(i)];
-    at[std::string(1, axis_char(a))] = display_position(a, u[i]);
+  for (int i = 0; i < r.machine.axis_count(); ++i) {
+    const AxisName a = r.machine.axis_order[static_cast<size_t>(i)];
+    at[std::string(1, axis_char(a))] = display_position(a, r.u[i]);
   }
   doc["at"] = at;
   nlohmann::ordered_json g = nlohmann::ordered_json::object();
-  for (const ErrorGain& e : gains) {
+  for (const ErrorGain& e : r.gains) {
     g[e.name] = {{"dx", clean(e.dP.x())}, {"dy", clean(e.dP.y())}, {"dz", clean(e.dP.z())},
                  {"di", clean(e.dQ.x())}, {"dj", clean(e.dQ.y())}, {"dk", clean(e.dQ.z())}};
   }
   doc["gains"] = g;
-  if (model) {
+  if (r.model) {
     nlohmann::ordered_json c = nlohmann::ordered_json::object();
-    for (size_t k = 0; k < gains.size(); ++k) {
-      const Eigen::Vector3d d = contribution_um(gains[k], values[k]);
-      c[gains[k].name] = {{"value", clean(display_value(gains[k], values[k]))},
-                          {"dx_um", clean(d.x())},
-                          {"dy_um", clean(d.y())},
-                          {"dz_um", clean(d.z())}};
+    for (size_t k = 0; k < r.gains.size(); ++k) {
+      const Eigen::Vector3d d = contribution_um(r.gains[k], r.values[k]);
+      c[r.gains[k].name] = {{"value", clean(display_value(r.gains[k], r.values[k]))},
+                            {"dx_um", clean(d.x())},
+                            {"dy_um", clean(d.y())},
+                            {"dz_um", clean(d.z())}};
     }
-    const PoseError fo = model->first_order(u), ex = model->exact(u);
+    const PoseError fo = r.model->first_order(r.u), ex = r.model->exact(r.u);
     doc["errors"] = {{"file", o.errors},
                      {"contributions", c},
                      {"first_order_um", um3(fo.dP_mm * units::kUmPerMm)},
@@ -91,36 +86,31 @@ void print_sensitivity_json(const SensitivityOptions& o, const SensitivityResult
 
 /// The table for people.
 void print_sensitivity_text(const SensitivityOptions& o, const SensitivityResult& r) {
-  const Machine& m = r.machine;
-  const AxisVector& u = r.u;
-  const std::vector<ErrorGain>& gains = r.gains;
-  const std::optional<ErrorModel>& model = r.model;
-  const std::vector<double>& values = r.values;
   std::cout << fmt::format("Error gains of {} ({} model, {}) at {}\n",
-                           m.name.empty() ? o.machine : m.name, o.model,
+                           r.machine.name.empty() ? o.machine : r.machine.name, o.model,
                            o.model == "dependent" ? "Hsu Table I" : "Hsu Table II", o.at);
   std::cout << "Position gains in mm per mm (translational errors) or mm per rad "
                "(angular);\norientation gains in rad per rad. Workpiece coordinates.\n\n";
   std::cout << fmt::format("{:<6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>7}", "error", "dx", "dy",
                            "dz", "di", "dj", "dk");
-  if (model)
+  if (r.model)
     std::cout << fmt::format(" | {:>9} {:>8} {:>8} {:>8}", "value", "dx um", "dy um", "dz um");
   std::cout << "\n";
-  for (size_t k = 0; k < gains.size(); ++k) {
-    const ErrorGain& e = gains[k];
+  for (size_t k = 0; k < r.gains.size(); ++k) {
+    const ErrorGain& e = r.gains[k];
     std::cout << fmt::format("{:<6} {:>10.3f} {:>10.3f} {:>10.3f} {:>7.3f} {:>7.3f} {:>7.3f}",
                              e.name, clean(e.dP.x()), clean(e.dP.y()), clean(e.dP.z()),
                              clean(e.dQ.x()), clean(e.dQ.y()), clean(e.dQ.z()));
-    if (model) {
-      const Eigen::Vector3d d = contribution_um(gains[k], values[k]);
+    if (r.model) {
+      const Eigen::Vector3d d = contribution_um(r.gains[k], r.values[k]);
       std::cout << fmt::format(" | {:>6.2f} {:<2} {:>8.3f} {:>8.3f} {:>8.3f}",
-                               clean(display_value(e, values[k])), e.angular ? "ur" : "um",
+                               clean(display_value(e, r.values[k])), e.angular ? "ur" : "um",
                                clean(d.x()), clean(d.y()), clean(d.z()));
     }
     std::cout << "\n";
   }
-  if (model) {
-    const PoseError fo = model->first_order(u), ex = model->exact(u);
+  if (r.model) {
+    const PoseError fo = r.model->first_order(r.u), ex = r.model->exact(r.u);
     std::cout << fmt::format(
         "\nTool-tip error at {} (workpiece coordinates, actual - nominal):\n"
         "  first order  dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um\n"
