@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/parse_util.h"
+#include "core/common/units.h"
 #include "core/model/errors_csv.h"
 #include "core/model/machine_json.h"
 #include "core/model/sensitivity.h"
@@ -17,12 +18,116 @@
 namespace volmap::cli {
 
 namespace {
+
+double clean(double x) { return std::abs(x) < 1e-12 ? 0.0 : x; }
+
+double display_value(const ErrorGain& g, double v) {
+  return v * (g.angular ? units::kUradPerRad : units::kUmPerMm);
+}
+
+/// An error's contribution to the tool-tip error (um).
+Eigen::Vector3d contribution_um(const ErrorGain& g, double value) {
+  return g.dP * value * units::kUmPerMm;
+}
+
+nlohmann::ordered_json um3(const Eigen::Vector3d& v) {
+  return nlohmann::ordered_json::array({clean(v.x()), clean(v.y()), clean(v.z())});
+}
+
+struct SensitivityOptions {
+  std::string machine, errors, at, model = "independent";
+  bool json = false;
+};
+
+/// The gains at u and, with --errors, the model and each error's value.
+struct SensitivityResult {
+  const Machine& machine;
+  AxisVector u;
+  std::vector<ErrorGain> gains;
+  std::optional<ErrorModel> model;
+  std::vector<double> values;
+};
+
+/// --json: one document with the gains and, with --errors, each error's
+/// value and contribution and the total.
+void print_sensitivity_json(const SensitivityOptions& o, const SensitivityResult& r) {
+  nlohmann::ordered_json doc;
+  doc["model"] = o.model;
+  nlohmann::ordered_json at = nlohmann::ordered_json::object();
+  for (int i = 0; i < r.machine.axis_count(); ++i) {
+    const AxisName a = r.machine.axis_order[static_cast<size_t>(i)];
+    at[std::string(1, axis_char(a))] = display_position(a, r.u[i]);
+  }
+  doc["at"] = at;
+  nlohmann::ordered_json g = nlohmann::ordered_json::object();
+  for (const ErrorGain& e : r.gains) {
+    g[e.name] = {{"dx", clean(e.dP.x())}, {"dy", clean(e.dP.y())}, {"dz", clean(e.dP.z())},
+                 {"di", clean(e.dQ.x())}, {"dj", clean(e.dQ.y())}, {"dk", clean(e.dQ.z())}};
+  }
+  doc["gains"] = g;
+  if (r.model) {
+    nlohmann::ordered_json c = nlohmann::ordered_json::object();
+    for (size_t k = 0; k < r.gains.size(); ++k) {
+      const Eigen::Vector3d d = contribution_um(r.gains[k], r.values[k]);
+      c[r.gains[k].name] = {{"value", clean(display_value(r.gains[k], r.values[k]))},
+                            {"dx_um", clean(d.x())},
+                            {"dy_um", clean(d.y())},
+                            {"dz_um", clean(d.z())}};
+    }
+    const PoseError fo = r.model->first_order(r.u), ex = r.model->exact(r.u);
+    doc["errors"] = {{"file", o.errors},
+                     {"contributions", c},
+                     {"first_order_um", um3(fo.dP_mm * units::kUmPerMm)},
+                     {"exact_um", um3(ex.dP_mm * units::kUmPerMm)},
+                     {"exact_axis_urad", um3(ex.dQ * units::kUradPerRad)}};
+  }
+  std::cout << doc.dump(2) << "\n";
+}
+
+/// The table for people.
+void print_sensitivity_text(const SensitivityOptions& o, const SensitivityResult& r) {
+  std::cout << fmt::format("Error gains of {} ({} model, {}) at {}\n",
+                           r.machine.name.empty() ? o.machine : r.machine.name, o.model,
+                           o.model == "dependent" ? "Hsu Table I" : "Hsu Table II", o.at);
+  std::cout << "Position gains in mm per mm (translational errors) or mm per rad "
+               "(angular);\norientation gains in rad per rad. Workpiece coordinates.\n\n";
+  std::cout << fmt::format("{:<6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>7}", "error", "dx", "dy",
+                           "dz", "di", "dj", "dk");
+  if (r.model)
+    std::cout << fmt::format(" | {:>9} {:>8} {:>8} {:>8}", "value", "dx um", "dy um", "dz um");
+  std::cout << "\n";
+  for (size_t k = 0; k < r.gains.size(); ++k) {
+    const ErrorGain& e = r.gains[k];
+    std::cout << fmt::format("{:<6} {:>10.3f} {:>10.3f} {:>10.3f} {:>7.3f} {:>7.3f} {:>7.3f}",
+                             e.name, clean(e.dP.x()), clean(e.dP.y()), clean(e.dP.z()),
+                             clean(e.dQ.x()), clean(e.dQ.y()), clean(e.dQ.z()));
+    if (r.model) {
+      const Eigen::Vector3d d = contribution_um(r.gains[k], r.values[k]);
+      std::cout << fmt::format(" | {:>6.2f} {:<2} {:>8.3f} {:>8.3f} {:>8.3f}",
+                               clean(display_value(e, r.values[k])), e.angular ? "ur" : "um",
+                               clean(d.x()), clean(d.y()), clean(d.z()));
+    }
+    std::cout << "\n";
+  }
+  if (r.model) {
+    const PoseError fo = r.model->first_order(r.u), ex = r.model->exact(r.u);
+    std::cout << fmt::format(
+        "\nTool-tip error at {} (workpiece coordinates, actual - nominal):\n"
+        "  first order  dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um\n"
+        "  exact HTM    dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um  |dP| {:.3f} um\n"
+        "  tool axis    di {:8.3f} ur  dj {:8.3f} ur  dk {:8.3f} ur\n"
+        "(value: um for translational errors, ur = urad for angular ones; mean of both\n"
+        " directions for bidirectional tables)\n",
+        o.at, clean(fo.dP_mm.x() * units::kUmPerMm), clean(fo.dP_mm.y() * units::kUmPerMm),
+        clean(fo.dP_mm.z() * units::kUmPerMm), clean(ex.dP_mm.x() * units::kUmPerMm),
+        clean(ex.dP_mm.y() * units::kUmPerMm), clean(ex.dP_mm.z() * units::kUmPerMm),
+        ex.dP_mm.norm() * units::kUmPerMm, clean(ex.dQ.x() * units::kUradPerRad),
+        clean(ex.dQ.y() * units::kUradPerRad), clean(ex.dQ.z() * units::kUradPerRad));
+  }
+}
+
 Runner register_sensitivity(CLI::App& app) {
-  struct Opts {
-    std::string machine, errors, at, model = "independent";
-    bool json = false;
-  };
-  auto o = std::make_shared<Opts>();
+  auto o = std::make_shared<SensitivityOptions>();
   CLI::App* sub =
       app.add_subcommand("sensitivity",
                          "Error-gain table: change of the tool pose per unit of each geometric "
@@ -47,93 +152,17 @@ Runner register_sensitivity(CLI::App& app) {
     const AxisVector u = parse_axis_position(m, o->at, "--at");
     const Formulation f =
         o->model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
-    const std::vector<ErrorGain> gains = error_gains(m, f, u);
-    auto clean = [](double x) { return std::abs(x) < 1e-12 ? 0.0 : x; };
+    SensitivityResult r{m, u, error_gains(m, f, u), std::nullopt, {}};
     // With --errors: value of each error at u and its contribution (um).
-    std::optional<ErrorModel> model;
-    std::vector<double> values;
     if (!o->errors.empty()) {
-      model.emplace(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
-      values = error_values(m, model->errors(), u, OutsidePolicy::kError);
+      r.model.emplace(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
+      r.values = error_values(m, r.model->errors(), u, OutsidePolicy::kError);
     }
-    auto display_value = [](const ErrorGain& g, double v) { return v * (g.angular ? 1e6 : 1e3); };
-    auto contribution_um = [&](size_t k) -> Eigen::Vector3d {
-      return gains[k].dP * values[k] * 1e3;
-    };
-    auto um3 = [&](const Eigen::Vector3d& v) {
-      return nlohmann::ordered_json::array({clean(v.x()), clean(v.y()), clean(v.z())});
-    };
     if (o->json) {
-      nlohmann::ordered_json doc;
-      doc["model"] = o->model;
-      nlohmann::ordered_json at = nlohmann::ordered_json::object();
-      for (int i = 0; i < m.axis_count(); ++i) {
-        const AxisName a = m.axis_order[static_cast<size_t>(i)];
-        at[std::string(1, axis_char(a))] = display_position(a, u[i]);
-      }
-      doc["at"] = at;
-      nlohmann::ordered_json g = nlohmann::ordered_json::object();
-      for (const ErrorGain& e : gains) {
-        g[e.name] = {{"dx", clean(e.dP.x())}, {"dy", clean(e.dP.y())}, {"dz", clean(e.dP.z())},
-                     {"di", clean(e.dQ.x())}, {"dj", clean(e.dQ.y())}, {"dk", clean(e.dQ.z())}};
-      }
-      doc["gains"] = g;
-      if (model) {
-        nlohmann::ordered_json c = nlohmann::ordered_json::object();
-        for (size_t k = 0; k < gains.size(); ++k) {
-          const Eigen::Vector3d d = contribution_um(k);
-          c[gains[k].name] = {{"value", clean(display_value(gains[k], values[k]))},
-                              {"dx_um", clean(d.x())},
-                              {"dy_um", clean(d.y())},
-                              {"dz_um", clean(d.z())}};
-        }
-        const PoseError fo = model->first_order(u), ex = model->exact(u);
-        doc["errors"] = {{"file", o->errors},
-                         {"contributions", c},
-                         {"first_order_um", um3(fo.dP_mm * 1e3)},
-                         {"exact_um", um3(ex.dP_mm * 1e3)},
-                         {"exact_axis_urad", um3(ex.dQ * 1e6)}};
-      }
-      std::cout << doc.dump(2) << "\n";
+      print_sensitivity_json(*o, r);
       return 0;
     }
-    std::cout << fmt::format("Error gains of {} ({} model, {}) at {}\n",
-                             m.name.empty() ? o->machine : m.name, o->model,
-                             o->model == "dependent" ? "Hsu Table I" : "Hsu Table II", o->at);
-    std::cout << "Position gains in mm per mm (translational errors) or mm per rad "
-                 "(angular);\norientation gains in rad per rad. Workpiece coordinates.\n\n";
-    std::cout << fmt::format("{:<6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>7}", "error", "dx", "dy",
-                             "dz", "di", "dj", "dk");
-    if (model)
-      std::cout << fmt::format(" | {:>9} {:>8} {:>8} {:>8}", "value", "dx um", "dy um", "dz um");
-    std::cout << "\n";
-    for (size_t k = 0; k < gains.size(); ++k) {
-      const ErrorGain& e = gains[k];
-      std::cout << fmt::format("{:<6} {:>10.3f} {:>10.3f} {:>10.3f} {:>7.3f} {:>7.3f} {:>7.3f}",
-                               e.name, clean(e.dP.x()), clean(e.dP.y()), clean(e.dP.z()),
-                               clean(e.dQ.x()), clean(e.dQ.y()), clean(e.dQ.z()));
-      if (model) {
-        const Eigen::Vector3d d = contribution_um(k);
-        std::cout << fmt::format(" | {:>6.2f} {:<2} {:>8.3f} {:>8.3f} {:>8.3f}",
-                                 clean(display_value(e, values[k])), e.angular ? "ur" : "um",
-                                 clean(d.x()), clean(d.y()), clean(d.z()));
-      }
-      std::cout << "\n";
-    }
-    if (model) {
-      const PoseError fo = model->first_order(u), ex = model->exact(u);
-      std::cout << fmt::format(
-          "\nTool-tip error at {} (workpiece coordinates, actual - nominal):\n"
-          "  first order  dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um\n"
-          "  exact HTM    dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um  |dP| {:.3f} um\n"
-          "  tool axis    di {:8.3f} ur  dj {:8.3f} ur  dk {:8.3f} ur\n"
-          "(value: um for translational errors, ur = urad for angular ones; mean of both\n"
-          " directions for bidirectional tables)\n",
-          o->at, clean(fo.dP_mm.x() * 1e3), clean(fo.dP_mm.y() * 1e3), clean(fo.dP_mm.z() * 1e3),
-          clean(ex.dP_mm.x() * 1e3), clean(ex.dP_mm.y() * 1e3), clean(ex.dP_mm.z() * 1e3),
-          ex.dP_mm.norm() * 1e3, clean(ex.dQ.x() * 1e6), clean(ex.dQ.y() * 1e6),
-          clean(ex.dQ.z() * 1e6));
-    }
+    print_sensitivity_text(*o, r);
     return 0;
   };
 }

@@ -9,6 +9,7 @@
 #include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/common/axis_name.h"
@@ -18,6 +19,10 @@ namespace volmap {
 /// Parses a whole JSON document; malformed text is an InputError at
 /// file:line:column.
 nlohmann::json parse_json_document(std::istream& in, const std::string& file);
+
+/// Line and column (1-based) in `text` of the position nlohmann's
+/// parse_error reports (its `byte`: 1-based, the character it stopped at).
+std::pair<int, int> json_error_line_column(const std::string& text, std::size_t byte);
 
 /// For a parse that failed with nlohmann's out_of_range (error 406: a number
 /// too large for a double, which carries no position): InputError at the

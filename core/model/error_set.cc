@@ -29,11 +29,12 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "core/common/units.h"
+
 namespace volmap {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
 int sign_of(double v) { return (v > 0.0) - (v < 0.0); }
 
@@ -68,7 +69,7 @@ std::string format_number(double v) {
 
 /// Position in the unit a user reads: degrees for rotary axes, mm otherwise.
 std::string format_position(const AxisErrorTable& table, double q) {
-  if (is_rotary(table.axis)) return format_number(q * kRadToDeg) + " deg";
+  if (is_rotary(table.axis)) return format_number(q * units::kDegPerRad) + " deg";
   return format_number(q) + " mm";
 }
 

@@ -2,10 +2,8 @@
 
 #include <fmt/format.h>
 
-#include <cerrno>
 #include <charconv>
 #include <cstdlib>
-#include <fstream>
 #include <iostream>
 #include <iterator>
 #include <map>
@@ -15,24 +13,15 @@
 #include <vector>
 
 #include "core/common/axis_name.h"
+#include "core/common/csv.h"
 #include "core/common/input_error.h"
+#include "core/common/input_file.h"
+#include "core/common/units.h"
 #include "core/model/errors_csv.h"
 
 namespace volmap {
 
 namespace {
-
-std::vector<std::string> split_lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::string line;
-  std::istringstream in(text);
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    lines.push_back(line);
-  }
-  if (!lines.empty() && lines[0].rfind("\xEF\xBB\xBF", 0) == 0) lines[0].erase(0, 3);
-  return lines;
-}
 
 std::string strip_comment(const std::string& line) {
   const size_t at = line.find("//");
@@ -75,7 +64,10 @@ std::optional<ErrorName> iso_name(const std::string& raw) {
   return parse_error_name(n);
 }
 
-double unit_factor(const ErrorName& n) { return is_angular(n.component) ? 1e6 : 1e3; }
+/// File unit (mm, rad) -> errors.md unit (um, urad).
+double unit_factor(const ErrorName& n) {
+  return is_angular(n.component) ? units::kUradPerRad : units::kUmPerMm;
+}
 
 bool is_axis_letter(const std::string& t) {
   return t.size() == 1 &&
@@ -99,7 +91,7 @@ ErrorsFormat parse_errors_format(const std::string& name) {
   if (name == "volmap") return ErrorsFormat::kVolmap;
   if (name == "isg-csv") return ErrorsFormat::kIsgCsv;
   if (name == "etalon") return ErrorsFormat::kEtalon;
-  throw std::invalid_argument("--errors-format " + name +
+  throw std::invalid_argument("errors format " + name +
                               ": expected auto, volmap, isg-csv or etalon");
 }
 
@@ -119,7 +111,7 @@ const char* errors_format_name(ErrorsFormat f) {
 
 ErrorsFormat detect_errors_format(const std::string& text) {
   bool slash_comments = false;
-  for (const std::string& raw : split_lines(text)) {
+  for (const std::string& raw : csv::split_lines(text)) {
     const size_t b = raw.find_first_not_of(" \t");
     if (b == std::string::npos) continue;
     if (raw.compare(b, 2, "//") == 0) {
@@ -143,7 +135,7 @@ std::string isg_csv_to_errors_csv(const std::string& text, const std::string& fi
   Emitter out{"", line_of};
   out.line("# volmap component errors v1", 0);
   out.line("# source: ISG CSV " + file, 0);
-  const std::vector<std::string> lines = split_lines(text);
+  const std::vector<std::string> lines = csv::split_lines(text);
   bool in_block = false;       // a header has been read in this block
   std::vector<double> factor;  // per column, mm/rad -> um/urad (argument: 1)
   for (size_t i = 0; i < lines.size(); ++i) {
@@ -199,7 +191,7 @@ std::string etalon_to_errors_csv(const std::string& text, const std::string& fil
   Emitter out{"", line_of};
   out.line("# volmap component errors v1", 0);
   out.line("# source: Etalon exchange format " + file, 0);
-  const std::vector<std::string> lines = split_lines(text);
+  const std::vector<std::string> lines = csv::split_lines(text);
   std::string location_header, location_row;
   int location_line = 0;
   std::optional<ErrorName> section;
@@ -326,15 +318,10 @@ ErrorSet read_errors(std::istream& in, const std::string& file, ErrorsFormat for
 }
 
 ErrorSet load_errors(const std::string& path, ErrorsFormat format) {
-  if (path == "-") return read_errors(std::cin, "<stdin>", format);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    const std::string reason = std::generic_category().message(errno);
-    throw InputError(
-        path, 0,
-        "cannot open the errors file (" + reason + "); check the path and the permissions");
-  }
-  return read_errors(in, path, format);
+  return read_input_file(path, "the errors file",
+                         [format](std::istream& in, const std::string& file) {
+                           return read_errors(in, file, format);
+                         });
 }
 
 }  // namespace volmap

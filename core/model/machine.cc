@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/common/trig.h"
+#include "core/common/units.h"
 
 namespace volmap {
 
@@ -89,7 +90,7 @@ void check_within_travel(const Machine& m, const AxisVector& u) {
     const double q = u[i];
     if (!(q >= L.min - kSlack && q <= L.max + kSlack)) {
       const AxisName a = m.axis_order[static_cast<size_t>(i)];
-      const double k = is_rotary(a) ? 180.0 / M_PI : 1.0;
+      const double k = is_rotary(a) ? units::kDegPerRad : 1.0;
       const char* unit = is_rotary(a) ? "deg" : "mm";
       throw std::invalid_argument(fmt::format("{}={:g} {} is outside the travel {:g}..{:g} {}",
                                               axis_char(a), q * k, unit, L.min * k, L.max * k,

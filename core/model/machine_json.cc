@@ -13,12 +13,12 @@
 
 #include "core/common/input_error.h"
 #include "core/common/json_input.h"
+#include "core/common/units.h"
 
 namespace volmap {
 namespace {
 
 using nlohmann::json;
-constexpr double kDegToRad = M_PI / 180.0;
 
 class Reader {
  public:
@@ -67,20 +67,6 @@ class Reader {
   std::string file_;
 };
 
-// Line and column (1-based) of byte offset `pos` in `text`.
-std::pair<int, int> line_column(const std::string& text, size_t pos) {
-  int line = 1, col = 1;
-  for (size_t i = 0; i < pos && i < text.size(); ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      col = 1;
-    } else {
-      ++col;
-    }
-  }
-  return {line, col};
-}
-
 struct AxisSpec {
   bool rotary = false;
   Eigen::Vector3d direction;
@@ -89,15 +75,13 @@ struct AxisSpec {
   bool used = false;
 };
 
-}  // namespace
-
-Machine read_machine_json(std::istream& in, const std::string& file) {
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  json doc;
+/// The JSON document of `text`; malformed JSON is an InputError at its line
+/// and column.
+json parse_machine_document(const std::string& text, const std::string& file) {
   try {
-    doc = json::parse(text);
+    return json::parse(text);
   } catch (const json::parse_error& e) {
-    const auto [line, col] = line_column(text, e.byte > 0 ? e.byte - 1 : 0);
+    const auto [line, col] = json_error_line_column(text, e.byte);
     std::string what = e.what();
     // nlohmann's message: "[json.exception.parse_error.101] parse error at
     // line 1, column 2: syntax error ..."; keep the part after the position.
@@ -107,6 +91,167 @@ Machine read_machine_json(std::istream& in, const std::string& file) {
   } catch (const json::out_of_range&) {
     throw_json_number_overflow(text, file);
   }
+}
+
+/// One entry of /axes: type, direction, travel and home (internal units).
+AxisSpec read_axis(const Reader& r, AxisName a, const json& ax, const std::string& path) {
+  if (!ax.is_object()) r.fail(path, "expected an object");
+  AxisSpec s;
+  const json& type = r.member(ax, path, "type");
+  if (type == "linear")
+    s.rotary = false;
+  else if (type == "rotary")
+    s.rotary = true;
+  else
+    r.fail(path + "/type", "expected \"linear\" or \"rotary\"");
+  if (s.rotary != is_rotary(a))
+    r.fail(path + "/type", fmt::format("axis {} is {} by ISO 841 naming", axis_char(a),
+                                       is_rotary(a) ? "rotary" : "linear"));
+  s.direction = r.unit3(r.member(ax, path, "direction"), path + "/direction");
+  const char* travel_key = s.rotary ? "travel_deg" : "travel_mm";
+  const double k = s.rotary ? units::kRadPerDeg : 1.0;
+  const json& travel = r.member(ax, path, travel_key);
+  const std::string tpath = path + "/" + travel_key;
+  if (travel.is_null()) {
+    if (!s.rotary) r.fail(tpath, "a linear axis needs a finite travel [min, max]");
+    s.limits.unlimited = true;
+  } else {
+    if (!travel.is_array() || travel.size() != 2)
+      r.fail(tpath, "expected [min, max] (or null for an unlimited rotary axis)");
+    s.limits.min = r.number(travel[0], tpath + "/0") * k;
+    s.limits.max = r.number(travel[1], tpath + "/1") * k;
+    if (!(s.limits.min < s.limits.max)) r.fail(tpath, "expected min < max");
+  }
+  const char* home_key = s.rotary ? "home_deg" : "home_mm";
+  if (auto h = ax.find(home_key); h != ax.end()) {
+    s.home = r.number(*h, path + "/" + home_key) * k;
+    if (!s.limits.unlimited && (s.home < s.limits.min || s.home > s.limits.max))
+      r.fail(path + "/" + home_key, "home lies outside the travel");
+  } else {
+    s.home = s.limits.unlimited ? 0.0 : std::clamp(0.0, s.limits.min, s.limits.max);
+  }
+  return s;
+}
+
+using AxisSpecs = std::array<std::optional<AxisSpec>, kAxisNameCount>;
+
+/// /axes into `spec`, and the machine's axis order, limits and home.
+AxisSpecs read_axes(const Reader& r, const json& doc, Machine& m) {
+  const json& axes = r.member(doc, "/", "axes");
+  if (!axes.is_object() || axes.empty())
+    r.fail("/axes", "expected an object of axes, e.g. {\"X\": {...}}");
+  AxisSpecs spec;
+  for (auto it = axes.begin(); it != axes.end(); ++it) {
+    const std::string path = "/axes/" + it.key();
+    if (it.key().size() != 1 || !axis_from_char(it.key()[0]))
+      r.fail(path, "unknown axis name: use X Y Z A B C");
+    const AxisName a = *axis_from_char(it.key()[0]);
+    spec[static_cast<size_t>(a)] = read_axis(r, a, it.value(), path);
+  }
+  for (int i = 0; i < kAxisNameCount; ++i) {
+    if (!spec[static_cast<size_t>(i)]) continue;
+    const AxisSpec& s = *spec[static_cast<size_t>(i)];
+    m.axis_order.push_back(static_cast<AxisName>(i));
+    m.limits.push_back(s.limits);
+  }
+  m.home.resize(m.axis_count());
+  for (int i = 0; i < m.axis_count(); ++i)
+    m.home[i] = spec[static_cast<size_t>(m.axis_order[static_cast<size_t>(i)])]->home;
+  return spec;
+}
+
+/// The joints of the chain under `key`, base first; each axis is used once.
+void read_chain(const Reader& r, const json& doc, const char* key, AxisSpecs& spec,
+                const Machine& m, std::vector<Joint>& chain) {
+  const std::string path = std::string("/") + key;
+  const json& c = r.member(doc, "/", key);
+  if (!c.is_array()) r.fail(path, "expected an array of joints, base first");
+  for (size_t i = 0; i < c.size(); ++i) {
+    const std::string jp = path + "/" + std::to_string(i);
+    if (!c[i].is_object()) r.fail(jp, "expected {\"axis\": ..., \"offset_mm\": [...]}");
+    Joint j;
+    j.axis = r.axis_name(r.member(c[i], jp, "axis"), jp + "/axis");
+    auto& s = spec[static_cast<size_t>(j.axis)];
+    if (!s)
+      r.fail(jp + "/axis", fmt::format("axis {} is not defined under /axes", axis_char(j.axis)));
+    if (s->used)
+      r.fail(jp + "/axis", fmt::format("axis {} appears twice in the chains", axis_char(j.axis)));
+    s->used = true;
+    j.rotary = s->rotary;
+    j.direction_parent = s->direction;
+    if (auto o = c[i].find("offset_mm"); o != c[i].end())
+      j.offset_parent_mm = r.vec3(*o, jp + "/offset_mm");
+    j.index = *m.index_of(j.axis);
+    chain.push_back(j);
+  }
+}
+
+/// Origins and /tool.
+void read_offsets_and_tool(const Reader& r, const json& doc, Machine& m) {
+  if (auto it = doc.find("workpiece_origin_mm"); it != doc.end())
+    m.workpiece_origin_mm = r.vec3(*it, "/workpiece_origin_mm");
+  if (auto it = doc.find("spindle_offset_mm"); it != doc.end())
+    m.spindle_offset_mm = r.vec3(*it, "/spindle_offset_mm");
+  const json& tool = r.member(doc, "/", "tool");
+  if (!tool.is_object()) r.fail("/tool", "expected {\"length_mm\": ..., \"axis\": [...]}");
+  m.tool_length_mm = r.number(r.member(tool, "/tool", "length_mm"), "/tool/length_mm");
+  if (m.tool_length_mm < 0) r.fail("/tool/length_mm", "a tool length cannot be negative");
+  if (auto it = tool.find("axis"); it != tool.end()) m.tool_axis = r.unit3(*it, "/tool/axis");
+}
+
+/// The machine's axis named by a one-letter `key`, or an InputError at `path`.
+AxisName machine_axis(const Reader& r, const Machine& m, const std::string& key,
+                      const std::string& path) {
+  if (key.size() != 1 || !axis_from_char(key[0]) || !m.index_of(*axis_from_char(key[0])))
+    r.fail(path, "not an axis of this machine");
+  return *axis_from_char(key[0]);
+}
+
+/// Measurement poses of the kinematic-parameter-independent model.
+void read_measured_at(const Reader& r, const json& doc, Machine& m) {
+  m.measured_at.assign(static_cast<size_t>(m.axis_count()), m.home);
+  auto it = doc.find("measured_at");
+  if (it == doc.end()) return;
+  if (!it->is_object()) r.fail("/measured_at", "expected {\"Y\": {\"X\": 500, \"Z\": 0}, ...}");
+  for (auto e = it->begin(); e != it->end(); ++e) {
+    const std::string path = "/measured_at/" + e.key();
+    const AxisName measured = machine_axis(r, m, e.key(), path);
+    if (is_rotary(measured))
+      r.fail(path, "only linear axes are measured at the tool tip (Hsu III.B)");
+    if (!e.value().is_object()) r.fail(path, "expected {\"X\": position, ...}");
+    AxisVector& pose = m.measured_at[static_cast<size_t>(*m.index_of(measured))];
+    for (auto p = e.value().begin(); p != e.value().end(); ++p) {
+      const std::string pp = path + "/" + p.key();
+      const AxisName other = machine_axis(r, m, p.key(), pp);
+      if (other == measured) r.fail(pp, "the measured axis itself moves; give the other axes");
+      pose[*m.index_of(other)] =
+          r.number(p.value(), pp) * (is_rotary(other) ? units::kRadPerDeg : 1.0);
+    }
+  }
+}
+
+/// /structure, when given, must be the structure code the chains describe.
+void check_structure(const Reader& r, const json& doc, const Machine& m) {
+  auto it = doc.find("structure");
+  if (it == doc.end()) return;
+  if (!it->is_string()) r.fail("/structure", "expected a string such as \"[w C' A' X' Y' b Z t]\"");
+  // Compare ignoring spaces.
+  auto squash = [](std::string s) {
+    std::string o;
+    for (char ch : s)
+      if (ch != ' ') o += ch;
+    return o;
+  };
+  if (squash(it->get<std::string>()) != squash(m.structure_code()))
+    r.fail("/structure", fmt::format("the chains describe {}, not {}", m.structure_code(),
+                                     it->get<std::string>()));
+}
+
+}  // namespace
+
+Machine read_machine_json(std::istream& in, const std::string& file) {
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const json doc = parse_machine_document(text, file);
 
   Reader r(file);
   if (!doc.is_object()) r.fail("/", "expected a JSON object (a machine)");
@@ -123,146 +268,16 @@ Machine read_machine_json(std::istream& in, const std::string& file) {
     if (!it->is_string()) r.fail("/description", "expected a string");
     m.description = it->get<std::string>();
   }
-
-  // Axes.
-  const json& axes = r.member(doc, "/", "axes");
-  if (!axes.is_object() || axes.empty())
-    r.fail("/axes", "expected an object of axes, e.g. {\"X\": {...}}");
-  std::array<std::optional<AxisSpec>, kAxisNameCount> spec;
-  for (auto it = axes.begin(); it != axes.end(); ++it) {
-    const std::string path = "/axes/" + it.key();
-    if (it.key().size() != 1 || !axis_from_char(it.key()[0]))
-      r.fail(path, "unknown axis name: use X Y Z A B C");
-    const AxisName a = *axis_from_char(it.key()[0]);
-    const json& ax = it.value();
-    if (!ax.is_object()) r.fail(path, "expected an object");
-    AxisSpec s;
-    const json& type = r.member(ax, path, "type");
-    if (type == "linear")
-      s.rotary = false;
-    else if (type == "rotary")
-      s.rotary = true;
-    else
-      r.fail(path + "/type", "expected \"linear\" or \"rotary\"");
-    if (s.rotary != is_rotary(a))
-      r.fail(path + "/type", fmt::format("axis {} is {} by ISO 841 naming", axis_char(a),
-                                         is_rotary(a) ? "rotary" : "linear"));
-    s.direction = r.unit3(r.member(ax, path, "direction"), path + "/direction");
-    const char* travel_key = s.rotary ? "travel_deg" : "travel_mm";
-    const double k = s.rotary ? kDegToRad : 1.0;
-    const json& travel = r.member(ax, path, travel_key);
-    const std::string tpath = path + "/" + travel_key;
-    if (travel.is_null()) {
-      if (!s.rotary) r.fail(tpath, "a linear axis needs a finite travel [min, max]");
-      s.limits.unlimited = true;
-    } else {
-      if (!travel.is_array() || travel.size() != 2)
-        r.fail(tpath, "expected [min, max] (or null for an unlimited rotary axis)");
-      s.limits.min = r.number(travel[0], tpath + "/0") * k;
-      s.limits.max = r.number(travel[1], tpath + "/1") * k;
-      if (!(s.limits.min < s.limits.max)) r.fail(tpath, "expected min < max");
-    }
-    const char* home_key = s.rotary ? "home_deg" : "home_mm";
-    if (auto h = ax.find(home_key); h != ax.end()) {
-      s.home = r.number(*h, path + "/" + home_key) * k;
-      if (!s.limits.unlimited && (s.home < s.limits.min || s.home > s.limits.max))
-        r.fail(path + "/" + home_key, "home lies outside the travel");
-    } else {
-      s.home = s.limits.unlimited ? 0.0 : std::clamp(0.0, s.limits.min, s.limits.max);
-    }
-    spec[static_cast<size_t>(a)] = s;
-  }
-  for (int i = 0; i < kAxisNameCount; ++i) {
-    if (!spec[static_cast<size_t>(i)]) continue;
-    const AxisSpec& s = *spec[static_cast<size_t>(i)];
-    m.axis_order.push_back(static_cast<AxisName>(i));
-    m.limits.push_back(s.limits);
-  }
-  m.home.resize(m.axis_count());
-  for (int i = 0; i < m.axis_count(); ++i)
-    m.home[i] = spec[static_cast<size_t>(m.axis_order[static_cast<size_t>(i)])]->home;
-
-  // Chains.
-  auto read_chain = [&](const char* key, std::vector<Joint>& chain) {
-    const std::string path = std::string("/") + key;
-    const json& c = r.member(doc, "/", key);
-    if (!c.is_array()) r.fail(path, "expected an array of joints, base first");
-    for (size_t i = 0; i < c.size(); ++i) {
-      const std::string jp = path + "/" + std::to_string(i);
-      if (!c[i].is_object()) r.fail(jp, "expected {\"axis\": ..., \"offset_mm\": [...]}");
-      Joint j;
-      j.axis = r.axis_name(r.member(c[i], jp, "axis"), jp + "/axis");
-      auto& s = spec[static_cast<size_t>(j.axis)];
-      if (!s)
-        r.fail(jp + "/axis", fmt::format("axis {} is not defined under /axes", axis_char(j.axis)));
-      if (s->used)
-        r.fail(jp + "/axis", fmt::format("axis {} appears twice in the chains", axis_char(j.axis)));
-      s->used = true;
-      j.rotary = s->rotary;
-      j.direction_parent = s->direction;
-      if (auto o = c[i].find("offset_mm"); o != c[i].end())
-        j.offset_parent_mm = r.vec3(*o, jp + "/offset_mm");
-      j.index = *m.index_of(j.axis);
-      chain.push_back(j);
-    }
-  };
-  read_chain("workpiece_chain", m.workpiece_chain);
-  read_chain("tool_chain", m.tool_chain);
+  AxisSpecs spec = read_axes(r, doc, m);
+  read_chain(r, doc, "workpiece_chain", spec, m, m.workpiece_chain);
+  read_chain(r, doc, "tool_chain", spec, m, m.tool_chain);
   for (AxisName a : m.axis_order)
     if (!spec[static_cast<size_t>(a)]->used)
       r.fail(std::string("/axes/") + axis_char(a),
              "axis is in no chain: add it to workpiece_chain or tool_chain");
-
-  if (auto it = doc.find("workpiece_origin_mm"); it != doc.end())
-    m.workpiece_origin_mm = r.vec3(*it, "/workpiece_origin_mm");
-  if (auto it = doc.find("spindle_offset_mm"); it != doc.end())
-    m.spindle_offset_mm = r.vec3(*it, "/spindle_offset_mm");
-  const json& tool = r.member(doc, "/", "tool");
-  if (!tool.is_object()) r.fail("/tool", "expected {\"length_mm\": ..., \"axis\": [...]}");
-  m.tool_length_mm = r.number(r.member(tool, "/tool", "length_mm"), "/tool/length_mm");
-  if (m.tool_length_mm < 0) r.fail("/tool/length_mm", "a tool length cannot be negative");
-  if (auto it = tool.find("axis"); it != tool.end()) m.tool_axis = r.unit3(*it, "/tool/axis");
-
-  // Measurement poses of the kinematic-parameter-independent model.
-  m.measured_at.assign(static_cast<size_t>(m.axis_count()), m.home);
-  if (auto it = doc.find("measured_at"); it != doc.end()) {
-    if (!it->is_object()) r.fail("/measured_at", "expected {\"Y\": {\"X\": 500, \"Z\": 0}, ...}");
-    for (auto e = it->begin(); e != it->end(); ++e) {
-      const std::string path = "/measured_at/" + e.key();
-      if (e.key().size() != 1 || !axis_from_char(e.key()[0]) ||
-          !m.index_of(*axis_from_char(e.key()[0])))
-        r.fail(path, "not an axis of this machine");
-      const AxisName measured = *axis_from_char(e.key()[0]);
-      if (is_rotary(measured))
-        r.fail(path, "only linear axes are measured at the tool tip (Hsu III.B)");
-      if (!e.value().is_object()) r.fail(path, "expected {\"X\": position, ...}");
-      AxisVector& pose = m.measured_at[static_cast<size_t>(*m.index_of(measured))];
-      for (auto p = e.value().begin(); p != e.value().end(); ++p) {
-        const std::string pp = path + "/" + p.key();
-        if (p.key().size() != 1 || !axis_from_char(p.key()[0]) ||
-            !m.index_of(*axis_from_char(p.key()[0])))
-          r.fail(pp, "not an axis of this machine");
-        const AxisName other = *axis_from_char(p.key()[0]);
-        if (other == measured) r.fail(pp, "the measured axis itself moves; give the other axes");
-        pose[*m.index_of(other)] = r.number(p.value(), pp) * (is_rotary(other) ? kDegToRad : 1.0);
-      }
-    }
-  }
-
-  if (auto it = doc.find("structure"); it != doc.end()) {
-    if (!it->is_string())
-      r.fail("/structure", "expected a string such as \"[w C' A' X' Y' b Z t]\"");
-    // Compare ignoring spaces.
-    auto squash = [](std::string s) {
-      std::string o;
-      for (char ch : s)
-        if (ch != ' ') o += ch;
-      return o;
-    };
-    if (squash(it->get<std::string>()) != squash(m.structure_code()))
-      r.fail("/structure", fmt::format("the chains describe {}, not {}", m.structure_code(),
-                                       it->get<std::string>()));
-  }
+  read_offsets_and_tool(r, doc, m);
+  read_measured_at(r, doc, m);
+  check_structure(r, doc, m);
   return m;
 }
 
