@@ -19,6 +19,17 @@
 namespace volmap::cli {
 namespace {
 
+/// identify(), its messages about a component fit in the command line's
+/// terms ("--component EXX:9: ...").
+IdentifyResult identify_naming_flags(const Machine& m, const Recordings& rec,
+                                     const IdentifyOptions& opt) {
+  try {
+    return identify(m, rec, opt);
+  } catch (const ComponentFitError& e) {
+    throw std::invalid_argument("--component " + e.detail());
+  }
+}
+
 Runner register_identify(CLI::App& app) {
   struct Opts {
     std::string machine, recordings, output, known, model = "independent", params;
@@ -92,7 +103,7 @@ Runner register_identify(CLI::App& app) {
       }
       opt.components.push_back({c.substr(0, colon), degree});
     }
-    const IdentifyResult res = identify(m, rec, opt);
+    const IdentifyResult res = identify_naming_flags(m, rec, opt);
     std::map<std::string, std::string> meta{
         {"machine", o->machine},
         {"source", fmt::format("volmap identify from {} ({} observations, rms residual {:.6f} um)",

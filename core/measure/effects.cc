@@ -9,11 +9,10 @@
 
 #include "core/common/input_error.h"
 #include "core/common/json_input.h"
+#include "core/common/units.h"
 
 namespace volmap {
 namespace {
-
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 struct KindName {
   EffectKind kind;
@@ -30,150 +29,162 @@ constexpr KindName kKinds[] = {
     {EffectKind::kRotaryPositioning, "rotary_positioning"},
 };
 
+/// The kind named by "effect"; fails naming every kind for another name.
+EffectKind effect_kind(const JsonObject& o) {
+  const std::string name = o.string("effect");
+  for (const KindName& k : kKinds)
+    if (name == k.name) return k.kind;
+  std::string list;
+  for (const KindName& k : kKinds) list += std::string(list.empty() ? "" : ", ") + k.name;
+  o.fail("effect", fmt::format("unknown effect \"{}\"; expected one of: {} (geometric errors "
+                               "come from the errors CSV)",
+                               name, list));
+}
+
+AxisName linear_axis(const JsonObject& o, const Machine& m, const std::string& key) {
+  const AxisName a = o.axis(key);
+  if (is_rotary(a) || !m.index_of(a))
+    o.fail(key, "expected a linear axis of this machine (X, Y or Z)");
+  return a;
+}
+
+AxisName rotary_axis(const JsonObject& o, const Machine& m, const std::string& key) {
+  const AxisName a = o.axis(key);
+  if (!is_rotary(a) || !m.index_of(a)) o.fail(key, "expected a rotary axis of this machine");
+  return a;
+}
+
+void read_thermal_drift(const JsonObject& o, const Machine& m, Effect& e) {
+  o.allow_only({"effect", "description", "axis", "kind", "amplitude_um", "tau_s", "rate_um_per_h",
+                "um_per_k", "sensor", "reference_c", "origin_mm", "reference_length_mm"});
+  e.axis = linear_axis(o, m, "axis");
+  const std::string kind = o.string_or("kind", "offset");
+  if (kind != "offset" && kind != "scale") o.fail("kind", "expected \"offset\" or \"scale\"");
+  e.scale = kind == "scale";
+  const int laws = (o.has("amplitude_um") ? 1 : 0) + (o.has("rate_um_per_h") ? 1 : 0) +
+                   (o.has("um_per_k") ? 1 : 0);
+  if (laws != 1)
+    o.fail("", "give exactly one of amplitude_um (with tau_s), rate_um_per_h, um_per_k");
+  if (o.has("amplitude_um")) {
+    e.law = DriftLaw::kSettling;
+    e.amplitude_um = o.number("amplitude_um");
+    e.tau_s = o.number("tau_s");
+    if (!(e.tau_s > 0)) o.fail("tau_s", "expected a time constant > 0 (s)");
+  } else if (o.has("rate_um_per_h")) {
+    e.law = DriftLaw::kRate;
+    e.rate_um_per_h = o.number("rate_um_per_h");
+  } else {
+    e.law = DriftLaw::kTemperature;
+    e.um_per_k = o.number("um_per_k");
+    e.sensor = o.string_or("sensor", "");
+    e.reference_c = o.number_or("reference_c", 20.0);
+  }
+  e.origin_mm = o.number_or("origin_mm", 0.0);
+  e.reference_length_mm = o.number_or("reference_length_mm", 1000.0);
+  if (!(e.reference_length_mm > 0)) o.fail("reference_length_mm", "expected a length > 0 (mm)");
+}
+
+void read_sag(const JsonObject& o, const Machine& m, Effect& e) {
+  o.allow_only({"effect", "description", "axis", "input_axis", "coefficient", "power", "origin"});
+  e.axis = linear_axis(o, m, "axis");
+  e.input_axis = o.axis("input_axis");
+  if (!m.index_of(e.input_axis)) o.fail("input_axis", "expected an axis of this machine");
+  e.coefficient = o.number("coefficient");
+  const double p = o.number_or("power", 2.0);
+  if (p < 1 || p > 8 || p != std::floor(p)) o.fail("power", "expected a whole number 1..8");
+  e.power = static_cast<int>(p);
+  e.origin = o.number_or("origin", 0.0);
+}
+
+void read_setup_shift(const JsonObject& o, const Machine& m, Effect& e) {
+  o.allow_only({"effect", "description", "axis", "per_run_um"});
+  const nlohmann::json& v = o.at("per_run_um");
+  if (!v.is_array()) o.fail("per_run_um", "expected an array, one entry per run");
+  const bool along_axis = o.has("axis");
+  if (along_axis) e.axis = linear_axis(o, m, "axis");
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const std::string p = "per_run_um/" + std::to_string(k);
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    if (v[k].is_number() && along_axis) {
+      d[static_cast<int>(e.axis)] = v[k].get<double>();
+    } else if (v[k].is_array() && v[k].size() == 3 && v[k][0].is_number() && v[k][1].is_number() &&
+               v[k][2].is_number()) {
+      d = {v[k][0].get<double>(), v[k][1].get<double>(), v[k][2].get<double>()};
+    } else {
+      o.fail(p, along_axis ? "expected a number (um along axis) or [x, y, z] (um)"
+                           : "expected [x, y, z] in um (or give \"axis\" and numbers)");
+    }
+    if (!d.allFinite()) o.fail(p, "expected finite numbers");
+    e.per_run_um.push_back(d);
+  }
+}
+
+/// rotary_wobble and rotary_positioning: the component errors of the axis
+/// they act as (GainEvaluator indices).
+void read_rotary(const JsonObject& o, const Machine& m, const GainEvaluator& gains, Effect& e) {
+  o.allow_only({"effect", "description", "axis", "order", "amplitude_urad", "phase_deg"});
+  e.axis = rotary_axis(o, m, "axis");
+  const double order = o.number_or("order", 1.0);
+  if (order < 0 || order != std::floor(order) || order > 360)
+    o.fail("order", "expected a whole number 0..360");
+  e.order = static_cast<int>(order);
+  e.amplitude_urad = o.number("amplitude_urad");
+  e.phase_rad = o.number_or("phase_deg", 0.0) * units::kRadPerDeg;
+  const int own = static_cast<int>(e.axis) - 3;
+  if (e.kind == EffectKind::kRotaryPositioning) {
+    e.gain_index[0] = gains.index_of(component_error_name(static_cast<Component>(own + 3), e.axis));
+  } else {
+    int k = 0;
+    for (int c = 0; c < 3; ++c)
+      if (c != own)
+        e.gain_index[k++] =
+            gains.index_of(component_error_name(static_cast<Component>(c + 3), e.axis));
+  }
+}
+
 Effect read_effect(const JsonObject& o, const Machine& m, const GainEvaluator& gains) {
   Effect e;
   e.path = o.path();
-  const std::string name = o.string("effect");
-  bool known = false;
-  for (const KindName& k : kKinds)
-    if (name == k.name) {
-      e.kind = k.kind;
-      known = true;
-    }
-  if (!known) {
-    std::string list;
-    for (const KindName& k : kKinds) list += std::string(list.empty() ? "" : ", ") + k.name;
-    o.fail("effect", fmt::format("unknown effect \"{}\"; expected one of: {} (geometric errors "
-                                 "come from the errors CSV)",
-                                 name, list));
-  }
-  auto linear_axis = [&](const std::string& key) {
-    const AxisName a = o.axis(key);
-    if (is_rotary(a) || !m.index_of(a))
-      o.fail(key, "expected a linear axis of this machine (X, Y or Z)");
-    return a;
-  };
-  auto rotary_axis = [&](const std::string& key) {
-    const AxisName a = o.axis(key);
-    if (!is_rotary(a) || !m.index_of(a)) o.fail(key, "expected a rotary axis of this machine");
-    return a;
-  };
+  e.kind = effect_kind(o);
   switch (e.kind) {
     case EffectKind::kReversal:
       o.allow_only({"effect", "description", "axis", "value_um"});
-      e.axis = linear_axis("axis");
+      e.axis = linear_axis(o, m, "axis");
       e.value_um = o.number("value_um");
       break;
-    case EffectKind::kThermalDrift: {
-      o.allow_only({"effect", "description", "axis", "kind", "amplitude_um", "tau_s",
-                    "rate_um_per_h", "um_per_k", "sensor", "reference_c", "origin_mm",
-                    "reference_length_mm"});
-      e.axis = linear_axis("axis");
-      const std::string kind = o.string_or("kind", "offset");
-      if (kind != "offset" && kind != "scale") o.fail("kind", "expected \"offset\" or \"scale\"");
-      e.scale = kind == "scale";
-      const int laws = (o.has("amplitude_um") ? 1 : 0) + (o.has("rate_um_per_h") ? 1 : 0) +
-                       (o.has("um_per_k") ? 1 : 0);
-      if (laws != 1)
-        o.fail("", "give exactly one of amplitude_um (with tau_s), rate_um_per_h, um_per_k");
-      if (o.has("amplitude_um")) {
-        e.law = DriftLaw::kSettling;
-        e.amplitude_um = o.number("amplitude_um");
-        e.tau_s = o.number("tau_s");
-        if (!(e.tau_s > 0)) o.fail("tau_s", "expected a time constant > 0 (s)");
-      } else if (o.has("rate_um_per_h")) {
-        e.law = DriftLaw::kRate;
-        e.rate_um_per_h = o.number("rate_um_per_h");
-      } else {
-        e.law = DriftLaw::kTemperature;
-        e.um_per_k = o.number("um_per_k");
-        e.sensor = o.string_or("sensor", "");
-        e.reference_c = o.number_or("reference_c", 20.0);
-      }
-      e.origin_mm = o.number_or("origin_mm", 0.0);
-      e.reference_length_mm = o.number_or("reference_length_mm", 1000.0);
-      if (!(e.reference_length_mm > 0)) o.fail("reference_length_mm", "expected a length > 0 (mm)");
+    case EffectKind::kThermalDrift:
+      read_thermal_drift(o, m, e);
       break;
-    }
     case EffectKind::kCyclic:
       o.allow_only({"effect", "description", "axis", "period_mm", "amplitude_um", "phase_deg"});
-      e.axis = linear_axis("axis");
+      e.axis = linear_axis(o, m, "axis");
       e.period_mm = o.number("period_mm");
       if (!(e.period_mm > 0)) o.fail("period_mm", "expected a period > 0 (mm)");
       e.amplitude_um = o.number("amplitude_um");
-      e.phase_rad = o.number_or("phase_deg", 0.0) * kDegToRad;
+      e.phase_rad = o.number_or("phase_deg", 0.0) * units::kRadPerDeg;
       break;
     case EffectKind::kServoLag:
       o.allow_only({"effect", "description", "axis", "um_per_m_min"});
-      e.axis = linear_axis("axis");
+      e.axis = linear_axis(o, m, "axis");
       e.um_per_m_min = o.number("um_per_m_min");
       break;
-    case EffectKind::kSag: {
-      o.allow_only(
-          {"effect", "description", "axis", "input_axis", "coefficient", "power", "origin"});
-      e.axis = linear_axis("axis");
-      e.input_axis = o.axis("input_axis");
-      if (!m.index_of(e.input_axis)) o.fail("input_axis", "expected an axis of this machine");
-      e.coefficient = o.number("coefficient");
-      const double p = o.number_or("power", 2.0);
-      if (p < 1 || p > 8 || p != std::floor(p)) o.fail("power", "expected a whole number 1..8");
-      e.power = static_cast<int>(p);
-      e.origin = o.number_or("origin", 0.0);
+    case EffectKind::kSag:
+      read_sag(o, m, e);
       break;
-    }
-    case EffectKind::kSetupShift: {
-      o.allow_only({"effect", "description", "axis", "per_run_um"});
-      const nlohmann::json& v = o.at("per_run_um");
-      if (!v.is_array()) o.fail("per_run_um", "expected an array, one entry per run");
-      const bool along_axis = o.has("axis");
-      if (along_axis) e.axis = linear_axis("axis");
-      for (std::size_t k = 0; k < v.size(); ++k) {
-        const std::string p = "per_run_um/" + std::to_string(k);
-        Eigen::Vector3d d = Eigen::Vector3d::Zero();
-        if (v[k].is_number() && along_axis) {
-          d[static_cast<int>(e.axis)] = v[k].get<double>();
-        } else if (v[k].is_array() && v[k].size() == 3 && v[k][0].is_number() &&
-                   v[k][1].is_number() && v[k][2].is_number()) {
-          d = {v[k][0].get<double>(), v[k][1].get<double>(), v[k][2].get<double>()};
-        } else {
-          o.fail(p, along_axis ? "expected a number (um along axis) or [x, y, z] (um)"
-                               : "expected [x, y, z] in um (or give \"axis\" and numbers)");
-        }
-        if (!d.allFinite()) o.fail(p, "expected finite numbers");
-        e.per_run_um.push_back(d);
-      }
+    case EffectKind::kSetupShift:
+      read_setup_shift(o, m, e);
       break;
-    }
     case EffectKind::kRotaryWobble:
-    case EffectKind::kRotaryPositioning: {
-      o.allow_only({"effect", "description", "axis", "order", "amplitude_urad", "phase_deg"});
-      e.axis = rotary_axis("axis");
-      const double order = o.number_or("order", 1.0);
-      if (order < 0 || order != std::floor(order) || order > 360)
-        o.fail("order", "expected a whole number 0..360");
-      e.order = static_cast<int>(order);
-      e.amplitude_urad = o.number("amplitude_urad");
-      e.phase_rad = o.number_or("phase_deg", 0.0) * kDegToRad;
-      const int own = static_cast<int>(e.axis) - 3;
-      if (e.kind == EffectKind::kRotaryPositioning) {
-        e.gain_index[0] =
-            gains.index_of(component_error_name(static_cast<Component>(own + 3), e.axis));
-      } else {
-        int k = 0;
-        for (int c = 0; c < 3; ++c)
-          if (c != own)
-            e.gain_index[k++] =
-                gains.index_of(component_error_name(static_cast<Component>(c + 3), e.axis));
-      }
+    case EffectKind::kRotaryPositioning:
+      read_rotary(o, m, gains, e);
       break;
-    }
   }
   return e;
 }
 
 double axis_value(const Machine& m, const AxisVector& u, AxisName a) {
   const double q = u[*m.index_of(a)];
-  return is_rotary(a) ? q / kDegToRad : q;
+  return is_rotary(a) ? q / units::kRadPerDeg : q;
 }
 
 }  // namespace

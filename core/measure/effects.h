@@ -20,7 +20,7 @@
 //                       of input_axis in mm or degrees; coefficient in um per unit^power
 //   setup_shift         delta = per_run_um[run - 1] (a number along axis, or [x, y, z])
 // Rotary effects act as component errors of a rotary axis K at angle theta,
-// propagated by the first-order gains (core/gain_evaluator.h):
+// propagated by the first-order gains (core/model/gain_evaluator.h):
 //   rotary_wobble       tilts about the two axes perpendicular to K (for C: EAC, EBC)
 //                       amplitude_urad (cos, sin)(order theta + phase)
 //   rotary_positioning  angular positioning error (for C: ECC)

@@ -12,7 +12,7 @@
 // the current estimates e, p the recorded component or the projection
 // direction, R_rec_w the workpiece->recording rotation (identity, or R_b_w
 // for "# frame: machine"). Gauss-Newton on this exact model with the
-// first-order Jacobian J (error gains, core/gain_evaluator.h) held fixed:
+// first-order Jacobian J (error gains, core/model/gain_evaluator.h) held fixed:
 // the iteration converges to the exact least-squares solution; noise-free
 // data is recovered to far below 1e-6 um.
 //
@@ -27,6 +27,7 @@
 #include <Eigen/Core>
 #include <iosfwd>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,19 @@ namespace volmap {
 struct ComponentFit {
   std::string name;  ///< "EXX", "ECC"
   int degree = 3;
+};
+
+/// A ComponentFit the machine or the options cannot take. what() reads
+/// "component <detail>"; detail() names the fit as given and the problem
+/// ("EXX:9: the degree (order) is 1..8", "EXX given twice"), so a caller
+/// can name the fit in its own terms (the CLI: "--component <detail>").
+class ComponentFitError : public std::invalid_argument {
+ public:
+  explicit ComponentFitError(const std::string& detail);
+  const std::string& detail() const { return detail_; }
+
+ private:
+  std::string detail_;
 };
 
 struct IdentifyOptions {
@@ -114,7 +128,8 @@ struct IdentifyResult {
 
 /// Identifies the errors. Throws InputError (recordings file:line) for an
 /// observation the model cannot evaluate, std::invalid_argument for bad
-/// options (unknown names, a component on an axis that `known` tabulates).
+/// options (unknown names; ComponentFitError for a component on an axis
+/// that `known` tabulates).
 IdentifyResult identify(const Machine& m, const Recordings& rec, const IdentifyOptions& options);
 
 /// Errors CSV (shared/spec/errors.md) of the result: the blocks of

@@ -5,11 +5,11 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
-#include <numbers>
 #include <stdexcept>
 
 #include "core/common/input_error.h"
 #include "core/common/json_input.h"
+#include "core/common/units.h"
 #include "core/kinematics/kinematics.h"
 
 namespace volmap {
@@ -19,13 +19,30 @@ namespace {
 // memory (and a step count beyond long long is undefined behaviour).
 constexpr double kMaxPlanPoints = 1e7;
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kStill = 1e-12;  // mm or rad: an axis that moved less did not move
 
 std::string axis_key(AxisName a) { return std::string(1, axis_char(a)); }
 
 double to_internal(AxisName a, double display) {
-  return is_rotary(a) ? display * kDegToRad : display;
+  return is_rotary(a) ? display * units::kRadPerDeg : display;
+}
+
+/// The values an axis (AxisVector index) takes in a test, in display
+/// units (mm, degrees).
+struct AxisValues {
+  int index = 0;
+  std::vector<double> values;
+};
+
+/// Steps `k` (one index per list) to the next combination of the lists'
+/// values, the last list fastest; false after the last combination (k back
+/// at all zeros).
+bool next_combination(std::vector<std::size_t>& k, const std::vector<AxisValues>& lists) {
+  for (std::size_t j = lists.size(); j-- > 0;) {
+    if (++k[j] < lists[j].values.size()) return true;
+    k[j] = 0;
+  }
+  return false;
 }
 
 class Expander {
@@ -157,7 +174,7 @@ class Expander {
       for (int i = 0; i < m_.axis_count(); ++i) {
         const AxisName a = m_.axis_order[static_cast<std::size_t>(i)];
         at += fmt::format("{}{}={:g}", at.empty() ? "" : " ", axis_char(a),
-                          is_rotary(a) ? u[i] / kDegToRad : u[i]);
+                          is_rotary(a) ? u[i] / units::kRadPerDeg : u[i]);
       }
       t.fail("", fmt::format("planned point {} is outside travel ({}); change the test so every "
                              "point lies within the machine's travel",
@@ -196,184 +213,186 @@ class Expander {
   void expand_test(const JsonObject& t) {
     const std::string type = t.string("type");
     if (type == "laser") {
-      t.allow_only({"type", "description", "axis", "from", "to", "step", "bidirectional", "cycles",
-                    "at", "record", "beam", "dwell_s", "move_s", "pause_s", "feed_mm_min"});
-      const AxisName axis = t.axis("axis");
-      const std::optional<int> idx = m_.index_of(axis);
-      if (!idx || is_rotary(axis)) t.fail("axis", "expected a linear axis of this machine");
-      const Common c = common(t, static_cast<std::uint8_t>(1u << static_cast<int>(axis)));
-      const double from = t.number("from"), to = t.number("to"), step = t.number("step");
-      if (!(step > 0)) t.fail("step", "expected a number > 0 (mm)");
-      if (from == to) t.fail("to", "expected to != from");
-      const bool bidirectional = t.boolean_or("bidirectional", true);
-      AxisVector base = cur_;
-      if (t.has("at")) base = positions_from(t.object("at"), cur_);
-      std::vector<double> targets;
-      const double sign = to > from ? 1.0 : -1.0;
-      const double count = std::floor(std::abs(to - from) / step + 1e-9);
-      if (!(count <= kMaxPlanPoints)) t.fail("step", "too many points; use a larger step");
-      const auto n = static_cast<long long>(count);
-      for (long long k = 0; k <= n; ++k)
-        targets.push_back(from + sign * static_cast<double>(k) * step);
-      for (double feed : c.feeds) {
-        for (int cycle = 0; cycle < c.cycles; ++cycle) {
-          ++run_;
-          for (double q : targets) {
-            AxisVector u = base;
-            u[*idx] = q;
-            visit(t, u, c, feed, *idx, static_cast<int>(sign));
-          }
-          if (bidirectional)
-            for (auto it = targets.rbegin(); it != targets.rend(); ++it) {
-              AxisVector u = base;
-              u[*idx] = *it;
-              visit(t, u, c, feed, *idx, -static_cast<int>(sign));
-            }
-          t_ += c.pause_s;
-        }
-      }
+      expand_laser(t);
     } else if (type == "probe_ball") {
-      t.allow_only({"type", "description", "center_mm", "centers_mm", "a_deg", "b_deg", "c_deg",
-                    "cycles", "record", "beam", "dwell_s", "move_s", "pause_s", "feed_mm_min"});
-      const Common c = common(t, 0b111);
-      std::vector<Eigen::Vector3d> centres;
-      if (t.has("center_mm") == t.has("centers_mm"))
-        t.fail("", "give the ball centre as \"center_mm\": [x, y, z] or several as \"centers_mm\"");
-      if (t.has("center_mm")) {
-        centres.push_back(t.vec3("center_mm"));
-      } else {
-        const nlohmann::json& v = t.at("centers_mm");
-        if (!v.is_array() || v.empty()) t.fail("centers_mm", "expected an array of [x, y, z]");
-        for (std::size_t k = 0; k < v.size(); ++k) {
-          nlohmann::json wrap = {{"c", v[k]}};
-          const JsonObject w(file_, wrap, t.path_of("centers_mm") + "/" + std::to_string(k));
-          try {
-            centres.push_back(w.vec3("c"));
-          } catch (const InputError&) {
-            t.fail("centers_mm/" + std::to_string(k),
-                   "expected an array of three numbers [x, y, z]");
-          }
-        }
-      }
-      // Rotary angle lists, in machine axis order; outer loops first.
-      std::vector<std::pair<int, std::vector<double>>> angles;
-      for (int i = 0; i < m_.axis_count(); ++i) {
-        const AxisName a = m_.axis_order[static_cast<std::size_t>(i)];
-        if (!is_rotary(a)) continue;
-        const std::string key =
-            std::string(1, static_cast<char>(axis_char(a) - 'A' + 'a')) + "_deg";
-        std::vector<double> list{m_.home[i] / kDegToRad};
-        if (t.has(key)) list = t.values(key);
-        angles.push_back({i, list});
-      }
-      for (const char* k : {"a_deg", "b_deg", "c_deg"}) {
-        const std::optional<AxisName> a = axis_from_char(static_cast<char>(k[0] - 'a' + 'A'));
-        if (t.has(k) && !m_.index_of(*a)) t.fail(k, "this machine has no such rotary axis");
-      }
-      if (angles.empty()) t.fail("type", "a probe-ball test needs a machine with rotary axes");
-      for (double feed : c.feeds)
-        for (int cycle = 0; cycle < c.cycles; ++cycle) {
-          for (const Eigen::Vector3d& centre : centres) {
-            ++run_;
-            std::vector<std::size_t> k(angles.size(), 0);
-            bool done = false;
-            while (!done) {
-              AxisVector u = cur_;
-              for (std::size_t j = 0; j < angles.size(); ++j)
-                u[angles[j].first] = angles[j].second[k[j]] * kDegToRad;
-              AxisVector placed;
-              try {
-                placed = linear_axes_for_tip(m_, u, centre);
-              } catch (const std::invalid_argument& e) {
-                t.fail("", e.what());
-              }
-              visit(t, placed, c, feed);
-              done = true;
-              for (std::size_t j = angles.size(); j-- > 0;) {
-                if (++k[j] < angles[j].second.size()) {
-                  done = false;
-                  break;
-                }
-                k[j] = 0;
-              }
-            }
-          }
-          t_ += c.pause_s;
-        }
+      expand_probe_ball(t);
     } else if (type == "grid") {
-      t.allow_only({"type", "description", "axes", "cycles", "record", "beam", "dwell_s", "move_s",
-                    "pause_s", "feed_mm_min"});
-      const Common c = common(t, 0b111);
-      const JsonObject axes = t.object("axes");
-      std::vector<std::pair<int, std::vector<double>>> lists;
-      for (int i = 0; i < m_.axis_count(); ++i) {
-        const AxisName a = m_.axis_order[static_cast<std::size_t>(i)];
-        std::vector<double> list{m_.home[i] / (is_rotary(a) ? kDegToRad : 1.0)};
-        if (axes.has(axis_key(a))) list = axes.values(axis_key(a));
-        lists.push_back({i, list});
-      }
-      for (const std::string& key : axes.keys()) {
-        std::optional<AxisName> a;
-        if (key.size() == 1) a = axis_from_char(key[0]);
-        if (!a || !m_.index_of(*a))
-          axes.fail(key, fmt::format("\"{}\" is not an axis of this machine", key));
-      }
-      for (double feed : c.feeds)
-        for (int cycle = 0; cycle < c.cycles; ++cycle) {
-          ++run_;
-          std::vector<std::size_t> k(lists.size(), 0);
-          bool done = false;
-          while (!done) {
-            AxisVector u = cur_;
-            for (std::size_t j = 0; j < lists.size(); ++j) {
-              const AxisName a = m_.axis_order[static_cast<std::size_t>(lists[j].first)];
-              u[lists[j].first] = to_internal(a, lists[j].second[k[j]]);
-            }
-            visit(t, u, c, feed);
-            done = true;
-            for (std::size_t j = lists.size(); j-- > 0;) {
-              if (++k[j] < lists[j].second.size()) {
-                done = false;
-                break;
-              }
-              k[j] = 0;
-            }
-          }
-          t_ += c.pause_s;
-        }
+      expand_grid(t);
     } else if (type == "points") {
-      t.allow_only({"type", "description", "positions", "cycles", "record", "beam", "dwell_s",
-                    "move_s", "pause_s", "feed_mm_min"});
-      const Common c = common(t, 0b111);
-      const nlohmann::json& v = t.at("positions");
-      if (!v.is_array() || v.empty()) t.fail("positions", "expected an array of axis positions");
-      std::vector<AxisVector> us;
-      for (std::size_t k = 0; k < v.size(); ++k) {
-        const std::string p = "positions/" + std::to_string(k);
-        if (!v[k].is_array() || static_cast<int>(v[k].size()) != m_.axis_count())
-          t.fail(p, fmt::format(
-                        "expected {} numbers, one per axis in the machine's order (mm, degrees)",
-                        m_.axis_count()));
-        AxisVector u(m_.axis_count());
-        for (int i = 0; i < m_.axis_count(); ++i) {
-          const nlohmann::json& x = v[k][static_cast<std::size_t>(i)];
-          if (!x.is_number() || !std::isfinite(x.get<double>()))
-            t.fail(p + "/" + std::to_string(i), "expected a finite number");
-          u[i] = to_internal(m_.axis_order[static_cast<std::size_t>(i)], x.get<double>());
-        }
-        us.push_back(u);
-      }
-      for (double feed : c.feeds)
-        for (int cycle = 0; cycle < c.cycles; ++cycle) {
-          ++run_;
-          for (const AxisVector& u : us) visit(t, u, c, feed);
-          t_ += c.pause_s;
-        }
+      expand_points(t);
     } else {
       t.fail("type",
              fmt::format("unknown test type \"{}\"; expected laser, probe_ball, grid or points",
                          type));
     }
+  }
+
+  void expand_laser(const JsonObject& t) {
+    t.allow_only({"type", "description", "axis", "from", "to", "step", "bidirectional", "cycles",
+                  "at", "record", "beam", "dwell_s", "move_s", "pause_s", "feed_mm_min"});
+    const AxisName axis = t.axis("axis");
+    const std::optional<int> idx = m_.index_of(axis);
+    if (!idx || is_rotary(axis)) t.fail("axis", "expected a linear axis of this machine");
+    const Common c = common(t, static_cast<std::uint8_t>(1u << static_cast<int>(axis)));
+    const double from = t.number("from"), to = t.number("to"), step = t.number("step");
+    if (!(step > 0)) t.fail("step", "expected a number > 0 (mm)");
+    if (from == to) t.fail("to", "expected to != from");
+    const bool bidirectional = t.boolean_or("bidirectional", true);
+    AxisVector base = cur_;
+    if (t.has("at")) base = positions_from(t.object("at"), cur_);
+    std::vector<double> targets;
+    const double sign = to > from ? 1.0 : -1.0;
+    const double count = std::floor(std::abs(to - from) / step + 1e-9);
+    if (!(count <= kMaxPlanPoints)) t.fail("step", "too many points; use a larger step");
+    const auto n = static_cast<long long>(count);
+    for (long long k = 0; k <= n; ++k)
+      targets.push_back(from + sign * static_cast<double>(k) * step);
+    for (double feed : c.feeds) {
+      for (int cycle = 0; cycle < c.cycles; ++cycle) {
+        ++run_;
+        for (double q : targets) {
+          AxisVector u = base;
+          u[*idx] = q;
+          visit(t, u, c, feed, *idx, static_cast<int>(sign));
+        }
+        if (bidirectional)
+          for (auto it = targets.rbegin(); it != targets.rend(); ++it) {
+            AxisVector u = base;
+            u[*idx] = *it;
+            visit(t, u, c, feed, *idx, -static_cast<int>(sign));
+          }
+        t_ += c.pause_s;
+      }
+    }
+  }
+
+  /// "center_mm": [x, y, z] or "centers_mm": [[x, y, z], ...].
+  std::vector<Eigen::Vector3d> ball_centres(const JsonObject& t) const {
+    std::vector<Eigen::Vector3d> centres;
+    if (t.has("center_mm") == t.has("centers_mm"))
+      t.fail("", "give the ball centre as \"center_mm\": [x, y, z] or several as \"centers_mm\"");
+    if (t.has("center_mm")) {
+      centres.push_back(t.vec3("center_mm"));
+    } else {
+      const nlohmann::json& v = t.at("centers_mm");
+      if (!v.is_array() || v.empty()) t.fail("centers_mm", "expected an array of [x, y, z]");
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        nlohmann::json wrap = {{"c", v[k]}};
+        const JsonObject w(file_, wrap, t.path_of("centers_mm") + "/" + std::to_string(k));
+        try {
+          centres.push_back(w.vec3("c"));
+        } catch (const InputError&) {
+          t.fail("centers_mm/" + std::to_string(k), "expected an array of three numbers [x, y, z]");
+        }
+      }
+    }
+    return centres;
+  }
+
+  void expand_probe_ball(const JsonObject& t) {
+    t.allow_only({"type", "description", "center_mm", "centers_mm", "a_deg", "b_deg", "c_deg",
+                  "cycles", "record", "beam", "dwell_s", "move_s", "pause_s", "feed_mm_min"});
+    const Common c = common(t, 0b111);
+    const std::vector<Eigen::Vector3d> centres = ball_centres(t);
+    // Rotary angle lists, in machine axis order; outer loops first.
+    std::vector<AxisValues> angles;
+    for (int i = 0; i < m_.axis_count(); ++i) {
+      const AxisName a = m_.axis_order[static_cast<std::size_t>(i)];
+      if (!is_rotary(a)) continue;
+      const std::string key = std::string(1, static_cast<char>(axis_char(a) - 'A' + 'a')) + "_deg";
+      std::vector<double> list{m_.home[i] / units::kRadPerDeg};
+      if (t.has(key)) list = t.values(key);
+      angles.push_back({i, list});
+    }
+    for (const char* k : {"a_deg", "b_deg", "c_deg"}) {
+      const std::optional<AxisName> a = axis_from_char(static_cast<char>(k[0] - 'a' + 'A'));
+      if (t.has(k) && !m_.index_of(*a)) t.fail(k, "this machine has no such rotary axis");
+    }
+    if (angles.empty()) t.fail("type", "a probe-ball test needs a machine with rotary axes");
+    for (double feed : c.feeds)
+      for (int cycle = 0; cycle < c.cycles; ++cycle) {
+        for (const Eigen::Vector3d& centre : centres) {
+          ++run_;
+          std::vector<std::size_t> k(angles.size(), 0);
+          do {
+            AxisVector u = cur_;
+            for (std::size_t j = 0; j < angles.size(); ++j)
+              u[angles[j].index] = angles[j].values[k[j]] * units::kRadPerDeg;
+            AxisVector placed;
+            try {
+              placed = linear_axes_for_tip(m_, u, centre);
+            } catch (const std::invalid_argument& e) {
+              t.fail("", e.what());
+            }
+            visit(t, placed, c, feed);
+          } while (next_combination(k, angles));
+        }
+        t_ += c.pause_s;
+      }
+  }
+
+  void expand_grid(const JsonObject& t) {
+    t.allow_only({"type", "description", "axes", "cycles", "record", "beam", "dwell_s", "move_s",
+                  "pause_s", "feed_mm_min"});
+    const Common c = common(t, 0b111);
+    const JsonObject axes = t.object("axes");
+    std::vector<AxisValues> lists;
+    for (int i = 0; i < m_.axis_count(); ++i) {
+      const AxisName a = m_.axis_order[static_cast<std::size_t>(i)];
+      std::vector<double> list{m_.home[i] / (is_rotary(a) ? units::kRadPerDeg : 1.0)};
+      if (axes.has(axis_key(a))) list = axes.values(axis_key(a));
+      lists.push_back({i, list});
+    }
+    for (const std::string& key : axes.keys()) {
+      std::optional<AxisName> a;
+      if (key.size() == 1) a = axis_from_char(key[0]);
+      if (!a || !m_.index_of(*a))
+        axes.fail(key, fmt::format("\"{}\" is not an axis of this machine", key));
+    }
+    for (double feed : c.feeds)
+      for (int cycle = 0; cycle < c.cycles; ++cycle) {
+        ++run_;
+        std::vector<std::size_t> k(lists.size(), 0);
+        do {
+          AxisVector u = cur_;
+          for (std::size_t j = 0; j < lists.size(); ++j) {
+            const AxisName a = m_.axis_order[static_cast<std::size_t>(lists[j].index)];
+            u[lists[j].index] = to_internal(a, lists[j].values[k[j]]);
+          }
+          visit(t, u, c, feed);
+        } while (next_combination(k, lists));
+        t_ += c.pause_s;
+      }
+  }
+
+  void expand_points(const JsonObject& t) {
+    t.allow_only({"type", "description", "positions", "cycles", "record", "beam", "dwell_s",
+                  "move_s", "pause_s", "feed_mm_min"});
+    const Common c = common(t, 0b111);
+    const nlohmann::json& v = t.at("positions");
+    if (!v.is_array() || v.empty()) t.fail("positions", "expected an array of axis positions");
+    std::vector<AxisVector> us;
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      const std::string p = "positions/" + std::to_string(k);
+      if (!v[k].is_array() || static_cast<int>(v[k].size()) != m_.axis_count())
+        t.fail(p,
+               fmt::format("expected {} numbers, one per axis in the machine's order (mm, degrees)",
+                           m_.axis_count()));
+      AxisVector u(m_.axis_count());
+      for (int i = 0; i < m_.axis_count(); ++i) {
+        const nlohmann::json& x = v[k][static_cast<std::size_t>(i)];
+        if (!x.is_number() || !std::isfinite(x.get<double>()))
+          t.fail(p + "/" + std::to_string(i), "expected a finite number");
+        u[i] = to_internal(m_.axis_order[static_cast<std::size_t>(i)], x.get<double>());
+      }
+      us.push_back(u);
+    }
+    for (double feed : c.feeds)
+      for (int cycle = 0; cycle < c.cycles; ++cycle) {
+        ++run_;
+        for (const AxisVector& u : us) visit(t, u, c, feed);
+        t_ += c.pause_s;
+      }
   }
 
   std::string file_;

@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "core/common/input_error.h"
+#include "core/common/units.h"
 #include "core/model/gain_evaluator.h"
 
 namespace volmap {
@@ -77,7 +78,7 @@ Recordings simulate(const ErrorModel& model, const Plan& plan, const EffectSet* 
       ctx.temperature_c = plan.temperature ? plan.temperature->at(p.t_s) : std::nan("");
       d_w_mm += effects_deviation_w_mm(*effects, m, gains, ctx);
     }
-    Eigen::Vector3d d_um = d_w_mm * 1e3;
+    Eigen::Vector3d d_um = d_w_mm * units::kUmPerMm;
     if (plan.frame == RecordingFrame::kMachine)
       d_um = nominal_base_to_workpiece(m, p.u).linear() * d_um;
 

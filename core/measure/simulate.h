@@ -2,10 +2,10 @@
 // recordings an instrument would produce when running a plan on a machine
 // with the given geometric errors and effects.
 //
-// Per planned point (core/plan.h), in the recording frame (workpiece, or
+// Per planned point (core/measure/plan.h), in the recording frame (workpiece, or
 // machine base for plans with "frame": "machine"), micrometres:
 //   deviation = ErrorModel::exact(u, dir).dP            (geometric errors, exact HTM)
-//             + effects_deviation_w_mm(...)             (core/effects.h)
+//             + effects_deviation_w_mm(...)             (core/measure/effects.h)
 //             + noise_um * N(0, 1)                      (per recorded value)
 // projected on the beam direction for the projection form.
 // Positions are quantised to the recordings writer's decimals before the
