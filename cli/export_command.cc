@@ -2,7 +2,6 @@
 // a controller (docs/exports.md) into a folder.
 #include <fmt/format.h>
 
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -10,10 +9,9 @@
 #include <string>
 
 #include "cli/commands.h"
-#include "core/model/errors_import.h"
-#include "core/model/machine_json.h"
+#include "maps/exports/export_inputs.h"
 #include "maps/exports/exporters.h"
-#include "maps/tables/output_file.h"
+#include "maps/tables/output_wording.h"
 #include "maps/tables/table_file.h"
 
 namespace volmap::cli {
@@ -58,32 +56,15 @@ Runner register_export(CLI::App& app) {
       "-o tnc/");
 
   return [o]() -> int {
-    maps::refuse_output_equal_to_input(o->output, {o->table, o->machine, o->errors});
+    refuse_output_equal_to_input(o->output, {o->table, o->machine, o->errors},
+                                 maps::kOutputWording);
     const maps::VolumetricTable table = maps::load_table(o->table);
     maps::ExportOptions options;
-    if (!o->machine.empty()) {
-      const Machine m = load_machine_json(o->machine);
-      if (m.axis_count() != table.axis_count())
-        throw std::invalid_argument(fmt::format("{}: machine {} has {} axes, the table {} has {}",
-                                                o->machine, m.name, m.axis_count(), o->table,
-                                                table.axis_count()));
-      for (int i = 0; i < m.axis_count(); ++i) options.home.push_back(m.home[i]);
-    }
+    if (!o->machine.empty()) options.home = maps::export_home(o->machine, table, o->table);
     options.detection_unit_mm = o->detection_unit_um * 1e-3;
-    std::optional<ErrorSet> errors;
-    if (!o->errors.empty()) {
-      errors = load_errors(o->errors, parse_errors_format(o->errors_format));
-      options.errors = &*errors;
-    } else if (!table.errors_source.empty() && table.errors_source != "-" &&
-               std::filesystem::is_regular_file(table.errors_source)) {
-      // The table names the errors file it was built from (as given to
-      // volmap map): formats that export the component errors themselves
-      // (isg-csv, HEIDENHAIN KinematicsComp) read it from there when
-      // --errors is not given, so `export --table T --format F -o DIR` works
-      // as cli.md writes it. --errors overrides.
-      errors = load_errors(table.errors_source, ErrorsFormat::kAuto);
-      options.errors = &*errors;
-    }
+    const std::optional<ErrorSet> errors =
+        maps::export_errors(table, o->errors, parse_errors_format(o->errors_format));
+    if (errors) options.errors = &*errors;
     std::vector<maps::ExportFile> files;
     try {
       files = maps::export_table(table, o->format, options);

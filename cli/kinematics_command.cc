@@ -91,12 +91,128 @@ CorrectionOut correction_out(const Machine& m, const CorrectionSolver& corr, con
   return out;
 }
 
+struct KinematicsOptions {
+  std::string machine, forward, backward, previous, errors;
+  bool json = false, iterate = false;
+};
+
+// --forward: the nominal tool pose at an axis position, and the correction
+// there with --errors.
+int run_forward(const KinematicsOptions& o, const Machine& m, const std::string& name,
+                const CorrectionSolver* corrector) {
+  const AxisVector u = parse_axis_position(m, o.forward, "--forward");
+  const ToolPose v = nominal_forward(m, u);
+  std::optional<CorrectionOut> c;
+  if (corrector) c = correction_out(m, *corrector, u, o.errors);
+  if (o.json) {
+    nlohmann::ordered_json doc;
+    doc["tip_mm"] = {clean(v.tip_mm.x()), clean(v.tip_mm.y()), clean(v.tip_mm.z())};
+    doc["axis"] = {clean(v.axis.x()), clean(v.axis.y()), clean(v.axis.z())};
+    if (c) doc["correction"] = c->json;
+    std::cout << doc.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << fmt::format(
+      "Nominal tool pose of {} at {} (mm, deg), workpiece coordinates:\n"
+      "  tip   x {:.6f}  y {:.6f}  z {:.6f} mm\n  axis  i {:.9f}  j {:.9f}  k {:.9f}\n",
+      name, axes_text(m, u), clean(v.tip_mm.x()), clean(v.tip_mm.y()), clean(v.tip_mm.z()),
+      clean(v.axis.x()), clean(v.axis.y()), clean(v.axis.z()));
+  if (c) std::cout << "\n" << c->text;
+  return 0;
+}
+
+// The tool pose of --backward: x,y,z,i,j,k, or x,y,z along the machine's
+// tool axis on a three-axis machine.
+ToolPose backward_pose(const KinematicsOptions& o, const Machine& m, const Kinematics& kin) {
+  const std::vector<double> x = parse_numbers(o.backward, "--backward");
+  if (x.size() == 6) return {{x[0], x[1], x[2]}, {x[3], x[4], x[5]}};
+  if (x.size() == 3 && !kin.has_rotary_axes()) return {{x[0], x[1], x[2]}, m.tool_axis};
+  throw std::invalid_argument(
+      fmt::format("--backward {}: expected 6 values (x,y,z,i,j,k){}, got {}", o.backward,
+                  kin.has_rotary_axes() ? "" : " or 3 (x,y,z)", x.size()));
+}
+
+void print_solutions(const Machine& m, const std::string& name, const ToolPose& v,
+                     const BackwardSolutions& s, int k) {
+  std::cout << fmt::format(
+      "{} axis position{} of {} for the tool tip ({:g}, {:g}, {:g}) mm along ({:g}, {:g}, {:g}), "
+      "workpiece coordinates (mm, deg):\n",
+      s.count, s.count == 1 ? "" : "s", name, v.tip_mm.x(), v.tip_mm.y(), v.tip_mm.z(), v.axis.x(),
+      v.axis.y(), v.axis.z());
+  for (int i = 0; i < s.count; ++i) {
+    const AxisVector& u = s.u[static_cast<size_t>(i)];
+    const std::string out = outside_travel(m, u);
+    std::cout << fmt::format("  {}: {}{}{}\n", i + 1, axes_text(m, u),
+                             i == k ? "   (selected)" : "",
+                             out.empty() ? "" : "   (outside travel: " + out + ")");
+  }
+  if (s.singular)
+    std::cout << "Singular: the tool axis lies along the outer rotary axis; it is held at its "
+                 "previous position.\n";
+}
+
+// --backward: every axis position of a tool pose, the one selected, and
+// the correction of that one with --errors.
+int run_backward(const KinematicsOptions& o, const Machine& m, const std::string& name,
+                 const Kinematics& kin, const AxisVector& previous,
+                 const CorrectionSolver* corrector) {
+  const ToolPose v = backward_pose(o, m, kin);
+  BackwardSolutions s;
+  try {
+    s = kin.backward(v, previous);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("--backward {}: {}", o.backward, e.what()));
+  }
+  if (s.count == 0)
+    throw std::invalid_argument(fmt::format(
+        "--backward {}: no axis position of {} reaches this tool axis within the rotary travel",
+        o.backward, name));
+  const int k = kin.select(s, previous);
+  std::optional<CorrectionOut> c;
+  if (corrector) c = correction_out(m, *corrector, s.u[static_cast<size_t>(k)], o.errors);
+  if (o.json) {
+    nlohmann::ordered_json doc;
+    nlohmann::ordered_json sols = nlohmann::ordered_json::array();
+    for (int i = 0; i < s.count; ++i) sols.push_back(axes_json(m, s.u[static_cast<size_t>(i)]));
+    doc["solutions"] = sols;
+    doc["selected"] = k;
+    doc["singular"] = s.singular;
+    if (c) doc["correction"] = c->json;
+    std::cout << doc.dump(2) << "\n";
+    return 0;
+  }
+  print_solutions(m, name, v, s, k);
+  if (c) std::cout << "\n" << c->text;
+  return 0;
+}
+
+int run_kinematics(const KinematicsOptions& o) {
+  if (o.forward.empty() == o.backward.empty()) {
+    std::cerr << "volmap kinematics: give one of --forward or --backward (see volmap kinematics "
+                 "--help)\n";
+    return 2;
+  }
+  const Machine m = load_machine_json(o.machine);
+  const Kinematics kin(m);
+  const AxisVector previous =
+      o.previous.empty() ? m.home : parse_axis_position(m, o.previous, "--previous");
+  std::optional<ErrorModel> model;
+  std::optional<CorrectionSolver> corrector;
+  if (!o.errors.empty()) {
+    model.emplace(m, load_errors_csv(o.errors));
+    CorrectionOptions co;
+    co.residual = true;
+    if (o.iterate) co.max_iterations = 20;
+    corrector.emplace(*model, co);
+  }
+  const std::string name = m.name.empty() ? o.machine : m.name;
+  const CorrectionSolver* solver = corrector ? &*corrector : nullptr;
+  if (!o.forward.empty()) return run_forward(o, m, name, solver);
+  return run_backward(o, m, name, kin, previous, solver);
+}
+
 Runner register_kinematics(CLI::App& app) {
-  struct Opts {
-    std::string machine, forward, backward, previous, errors;
-    bool json = false, iterate = false;
-  };
-  auto o = std::make_shared<Opts>();
+  auto o = std::make_shared<KinematicsOptions>();
   CLI::App* sub = app.add_subcommand(
       "kinematics",
       "Nominal forward (axis position -> tool pose) and backward (tool pose -> all axis "
@@ -128,102 +244,7 @@ Runner register_kinematics(CLI::App& app) {
       "Example:\n  volmap kinematics --machine samples/machines/lei-hsu-xyzac.json "
       "--backward 10,20,30,0.5,0,0.8660254037844386 --previous 0,0,0,-30,90 --json");
 
-  return [o]() -> int {
-    if (o->forward.empty() == o->backward.empty()) {
-      std::cerr << "volmap kinematics: give one of --forward or --backward (see volmap kinematics "
-                   "--help)\n";
-      return 2;
-    }
-    const Machine m = load_machine_json(o->machine);
-    const Kinematics kin(m);
-    const AxisVector previous =
-        o->previous.empty() ? m.home : parse_axis_position(m, o->previous, "--previous");
-    std::optional<ErrorModel> model;
-    std::optional<CorrectionSolver> corrector;
-    if (!o->errors.empty()) {
-      model.emplace(m, load_errors_csv(o->errors));
-      CorrectionOptions co;
-      co.residual = true;
-      if (o->iterate) co.max_iterations = 20;
-      corrector.emplace(*model, co);
-    }
-    const std::string name = m.name.empty() ? o->machine : m.name;
-
-    if (!o->forward.empty()) {
-      const AxisVector u = parse_axis_position(m, o->forward, "--forward");
-      const ToolPose v = nominal_forward(m, u);
-      std::optional<CorrectionOut> c;
-      if (corrector) c = correction_out(m, *corrector, u, o->errors);
-      if (o->json) {
-        nlohmann::ordered_json doc;
-        doc["tip_mm"] = {clean(v.tip_mm.x()), clean(v.tip_mm.y()), clean(v.tip_mm.z())};
-        doc["axis"] = {clean(v.axis.x()), clean(v.axis.y()), clean(v.axis.z())};
-        if (c) doc["correction"] = c->json;
-        std::cout << doc.dump(2) << "\n";
-        return 0;
-      }
-      std::cout << fmt::format(
-          "Nominal tool pose of {} at {} (mm, deg), workpiece coordinates:\n"
-          "  tip   x {:.6f}  y {:.6f}  z {:.6f} mm\n  axis  i {:.9f}  j {:.9f}  k {:.9f}\n",
-          name, axes_text(m, u), clean(v.tip_mm.x()), clean(v.tip_mm.y()), clean(v.tip_mm.z()),
-          clean(v.axis.x()), clean(v.axis.y()), clean(v.axis.z()));
-      if (c) std::cout << "\n" << c->text;
-      return 0;
-    }
-
-    const std::vector<double> x = parse_numbers(o->backward, "--backward");
-    ToolPose v;
-    if (x.size() == 6) {
-      v = {{x[0], x[1], x[2]}, {x[3], x[4], x[5]}};
-    } else if (x.size() == 3 && !kin.has_rotary_axes()) {
-      v = {{x[0], x[1], x[2]}, m.tool_axis};
-    } else {
-      throw std::invalid_argument(
-          fmt::format("--backward {}: expected 6 values (x,y,z,i,j,k){}, got {}", o->backward,
-                      kin.has_rotary_axes() ? "" : " or 3 (x,y,z)", x.size()));
-    }
-    BackwardSolutions s;
-    try {
-      s = kin.backward(v, previous);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(fmt::format("--backward {}: {}", o->backward, e.what()));
-    }
-    if (s.count == 0)
-      throw std::invalid_argument(fmt::format(
-          "--backward {}: no axis position of {} reaches this tool axis within the rotary travel",
-          o->backward, name));
-    const int k = kin.select(s, previous);
-    std::optional<CorrectionOut> c;
-    if (corrector) c = correction_out(m, *corrector, s.u[static_cast<size_t>(k)], o->errors);
-    if (o->json) {
-      nlohmann::ordered_json doc;
-      nlohmann::ordered_json sols = nlohmann::ordered_json::array();
-      for (int i = 0; i < s.count; ++i) sols.push_back(axes_json(m, s.u[static_cast<size_t>(i)]));
-      doc["solutions"] = sols;
-      doc["selected"] = k;
-      doc["singular"] = s.singular;
-      if (c) doc["correction"] = c->json;
-      std::cout << doc.dump(2) << "\n";
-      return 0;
-    }
-    std::cout << fmt::format(
-        "{} axis position{} of {} for the tool tip ({:g}, {:g}, {:g}) mm along ({:g}, {:g}, {:g}), "
-        "workpiece coordinates (mm, deg):\n",
-        s.count, s.count == 1 ? "" : "s", name, v.tip_mm.x(), v.tip_mm.y(), v.tip_mm.z(),
-        v.axis.x(), v.axis.y(), v.axis.z());
-    for (int i = 0; i < s.count; ++i) {
-      const AxisVector& u = s.u[static_cast<size_t>(i)];
-      const std::string out = outside_travel(m, u);
-      std::cout << fmt::format("  {}: {}{}{}\n", i + 1, axes_text(m, u),
-                               i == k ? "   (selected)" : "",
-                               out.empty() ? "" : "   (outside travel: " + out + ")");
-    }
-    if (s.singular)
-      std::cout << "Singular: the tool axis lies along the outer rotary axis; it is held at its "
-                   "previous position.\n";
-    if (c) std::cout << "\n" << c->text;
-    return 0;
-  };
+  return [o]() -> int { return run_kinematics(*o); };
 }
 
 }  // namespace

@@ -21,9 +21,10 @@
 #include "core/model/errors_import.h"
 #include "core/model/machine_json.h"
 #include "maps/tables/factorized_table.h"
+#include "maps/tables/layer_name.h"
+#include "maps/tables/map_job.h"
 #include "maps/tables/map_report.h"
-#include "maps/tables/node_uncertainty.h"
-#include "maps/tables/output_file.h"
+#include "maps/tables/output_wording.h"
 #include "maps/tables/table_builder.h"
 #include "maps/tables/table_file.h"
 
@@ -67,27 +68,268 @@ double display(AxisName a, double v) {
 }
 const char* unit(AxisName a) { return is_rotary(a) ? "deg" : "mm"; }
 
-std::string layer_name(const maps::VolumetricTable& t, int layer) {
-  if (t.bidirectional_axes.empty()) return "both directions";
-  std::string s;
-  const ApproachDirections d = t.layer_directions(layer);
-  for (int a : t.bidirectional_axes)
-    s += fmt::format("{}{}{}", s.empty() ? "" : " ", axis_char(t.grid[static_cast<size_t>(a)].axis),
-                     d[static_cast<size_t>(a)] > 0 ? "+" : "-");
-  return s;
+struct MapOptions {
+  std::string machine, errors, errors_format = "auto", spacing, output, interpolation = "linear",
+                               model = "independent", form = "full";
+  std::string report, covariance;
+  double tolerance_um = 0.0, tolerance_urad = 0.0, repeatability_um = -1.0,
+         repeatability_urad = -1.0, max_table_gib = 2.0;
+  int threads = 0;
+  bool json = false;
+};
+
+// The first keys of the --json summary: what was written, from what.
+nlohmann::ordered_json summary_head(const MapOptions& o, const char* form,
+                                    const std::string& machine, const std::string& errors) {
+  nlohmann::ordered_json doc;
+  doc["table"] = o.output;
+  doc["form"] = form;
+  doc["machine"] = machine;
+  doc["errors"] = errors;
+  doc["model"] = o.model;
+  return doc;
+}
+
+// --form factorized: the 1-D tables and location errors, written as JSON.
+int run_factorized(const MapOptions& o, const ErrorModel& model) {
+  if (!o.spacing.empty() || o.tolerance_um > 0.0 || o.tolerance_urad > 0.0 || !o.report.empty())
+    throw std::invalid_argument(
+        "--form factorized is exact and has no grid: --spacing, --tolerance-um, "
+        "--tolerance-urad and --report apply to --form full");
+  const maps::FactorizedTable t = maps::factorized_table_of(o.machine, model);
+  const std::string text = maps::factorized_json(t);
+  if (o.output == "-") {
+    std::cout << text;
+    return 0;
+  }
+  maps::save_factorized(o.output, t);
+  if (o.json) {
+    nlohmann::ordered_json doc = summary_head(o, "factorized", t.machine_name, t.errors_source);
+    doc["values"] = maps::factorized_values(t);
+    doc["bytes"] = text.size();
+    std::cout << doc.dump(2) << "\n";
+  } else {
+    std::cout << fmt::format(
+        "Factorized table of {} ({} model, errors {}): 1-D component-error tables and "
+        "location errors, {} values, exact for the rigid-body model; written {} ({} bytes)\n",
+        t.machine_name, o.model, t.errors_source, maps::factorized_values(t), o.output,
+        text.size());
+  }
+  return 0;
+}
+
+// The progress bar on a terminal's standard error.
+void draw_progress(std::int64_t done, std::int64_t total) {
+  const int width = 40;
+  const int filled = total > 0 ? static_cast<int>(width * done / total) : width;
+  std::cerr << fmt::format("\rmap [{:<{}}] {:3d}%", std::string(static_cast<size_t>(filled), '#'),
+                           width, total > 0 ? static_cast<int>(100 * done / total) : 100)
+            << std::flush;
+  if (done == total) std::cerr << "\r" << std::string(52, ' ') << "\r" << std::flush;
+}
+
+maps::FullTableJob full_table_job(const MapOptions& o, const Machine& m, int threads,
+                                  const maps::UncertaintySources& uncertainty, bool bar) {
+  maps::FullTableJob job;
+  if (!o.spacing.empty()) job.spacing = parse_spacing(m, o.spacing);
+  job.tolerance_um = o.tolerance_um;
+  job.tolerance_urad = o.tolerance_urad;
+  job.build.threads = threads;
+  job.build.max_bytes = static_cast<std::size_t>(o.max_table_gib * double(1 << 30));
+  job.build.repeatability = uncertainty.repeatability;
+  job.build.covariance = uncertainty.covariance ? &*uncertainty.covariance : nullptr;
+  if (bar) job.build.progress = draw_progress;
+  job.check.method = maps::parse_interpolation(o.interpolation);
+  job.check.threads = threads;
+  return job;
+}
+
+void print_json_summary(const MapOptions& o, const maps::FullTableResult& r,
+                        const maps::TableExtremes& e, int threads) {
+  const maps::VolumetricTable& table = r.table;
+  const maps::CheckResult& checked = r.checked;
+  const bool five = table.pose_correction();
+  nlohmann::ordered_json doc = summary_head(o, "full", table.machine_name, table.errors_source);
+  nlohmann::ordered_json grid = nlohmann::ordered_json::array();
+  for (const maps::GridAxis& g : table.grid)
+    grid.push_back({{"axis", std::string(1, axis_char(g.axis))},
+                    {"unit", unit(g.axis)},
+                    {"start", display(g.axis, g.start)},
+                    {"end", display(g.axis, g.end)},
+                    {"spacing", display(g.axis, g.spacing)},
+                    {"nodes", g.count},
+                    {"uniform", g.uniform()}});
+  doc["grid"] = grid;
+  doc["nodes"] = table.node_count();
+  nlohmann::ordered_json layers = nlohmann::ordered_json::array();
+  for (int l = 0; l < table.layer_count(); ++l) layers.push_back(maps::layer_name(table, l));
+  doc["layers"] = layers;
+  doc["channels"] = table.channels;
+  doc["bytes"] = table.size_bytes();
+  doc["max_dv_um"] = e.max_dv_um;
+  if (e.max_du_um) doc["max_du_um"] = *e.max_du_um;
+  if (e.max_dq_urad) doc["max_dq_urad"] = *e.max_dq_urad;
+  if (e.max_du_rotary_urad) doc["max_du_rotary_urad"] = *e.max_du_rotary_urad;
+  if (e.max_u_um) doc["max_u_um"] = *e.max_u_um;
+  if (!o.report.empty()) doc["report"] = o.report;
+  doc["interpolation"] = maps::interpolation_name(r.method);
+  if (table.tolerance_um > 0.0) doc["tolerance_um"] = table.tolerance_um;
+  doc["max_interpolation_error_um"] = r.interpolation_um();
+  doc["max_interpolation_error_dv_um"] = checked.max_dv_um;
+  if (e.max_du_um) doc["max_interpolation_error_du_um"] = checked.max_du_um;
+  if (r.tolerance_urad > 0.0) doc["tolerance_urad"] = r.tolerance_urad;
+  if (e.max_dq_urad) doc["max_interpolation_error_dq_urad"] = checked.max_dq_urad;
+  if (five) {
+    doc["max_interpolation_error_du_rotary_urad"] = checked.max_du_rot_urad;
+    doc["du_check_points_near_singular_excluded"] = checked.du_excluded;
+    doc["correction_singular_nodes"] = r.summary.correction_singular;
+    doc["correction_max_residual_um"] = r.summary.correction_max_residual_mm * 1e3;
+  }
+  doc["check_points_per_layer"] = checked.points;
+  if (r.grids_tried > 0) doc["spacing_search_grids"] = r.grids_tried;
+  doc["correction_clamped_nodes"] = r.summary.correction_clamped;
+  doc["build_seconds"] = r.summary.seconds;
+  doc["threads"] = threads;
+  std::cout << doc.dump(2) << "\n";
+}
+
+// The grid, the layers, the extremes and the interpolation error in words.
+void print_table_text(const MapOptions& o, const maps::FullTableResult& r,
+                      const maps::TableExtremes& e) {
+  const maps::VolumetricTable& table = r.table;
+  std::cout << fmt::format("Volumetric table of {} ({} model, errors {})\n",
+                           table.machine_name.empty() ? o.machine : table.machine_name, o.model,
+                           table.errors_source);
+  for (const maps::GridAxis& g : table.grid)
+    std::cout << fmt::format("  {}  {:g}..{:g} {}  spacing {:g}  {} nodes{}\n", axis_char(g.axis),
+                             display(g.axis, g.start), display(g.axis, g.end), unit(g.axis),
+                             display(g.axis, g.spacing), g.count,
+                             g.uniform() ? "" : " (last cell shorter)");
+  std::string layers;
+  for (int l = 0; l < table.layer_count(); ++l)
+    layers += (l ? ", " : "") + maps::layer_name(table, l);
+  std::cout << fmt::format("  {} nodes x {} direction layer{} ({}), {:.1f} MiB\n",
+                           table.node_count(), table.layer_count(),
+                           table.layer_count() > 1 ? "s" : "", layers,
+                           static_cast<double>(table.size_bytes()) / (1 << 20));
+  std::cout << fmt::format("  max |dv| {:.3f} um", e.max_dv_um);
+  if (e.max_dq_urad) std::cout << fmt::format(", max |dQ| {:.3f} urad", *e.max_dq_urad);
+  if (e.max_du_um) std::cout << fmt::format(", max |du| {:.3f} um", *e.max_du_um);
+  if (e.max_du_rotary_urad)
+    std::cout << fmt::format(" and {:.3f} urad (rotary axes)", *e.max_du_rotary_urad);
+  if (e.max_u_um) std::cout << fmt::format(", max uncertainty u {:.3f} um", *e.max_u_um);
+  std::cout << "\n";
+  std::cout << fmt::format(
+      "  interpolation error ({}) max {:.4f} um{} over {} cell centres and random points per "
+      "layer\n",
+      maps::interpolation_name(r.method), r.interpolation_um(),
+      table.tolerance_um > 0.0 ? fmt::format(" (tolerance {:g} um)", table.tolerance_um) : "",
+      r.checked.points);
+}
+
+// The checks of the corrections and the build in words.
+void print_correction_text(const MapOptions& o, const maps::FullTableResult& r, int threads) {
+  const maps::CheckResult& checked = r.checked;
+  const maps::BuildSummary& summary = r.summary;
+  const bool five = r.table.pose_correction();
+  if (r.table.channel("ei"))
+    std::cout << fmt::format(
+        "  interpolation error of dQ max {:.4f} urad{}\n", checked.max_dq_urad,
+        r.tolerance_urad > 0.0 ? fmt::format(" (tolerance {:g} urad)", r.tolerance_urad) : "");
+  if (five)
+    std::cout << fmt::format(
+        "  interpolation error of du max {:.4f} um, {:.4f} urad (rotary), {} check points near "
+        "the singular position not compared; {} nodes at the singular position (outer axis's "
+        "correction suppressed), correction residual max {:.2g} um\n",
+        checked.max_du_um, checked.max_du_rot_urad, checked.du_excluded,
+        summary.correction_singular, summary.correction_max_residual_mm * 1e3);
+  if (summary.correction_clamped > 0 && five)
+    std::cout << fmt::format(
+        "  {} nodes' corrections reach beyond the travel of a limited axis "
+        "(errors there held at the travel end)\n",
+        summary.correction_clamped);
+  else if (summary.correction_clamped > 0)
+    std::cout << fmt::format(
+        "  {} nodes' corrections reach beyond the travel (error held at the "
+        "travel end)\n",
+        summary.correction_clamped);
+  std::cout << fmt::format("  built in {:.3f} s on {} thread{}; written {}\n", summary.seconds,
+                           threads, threads > 1 ? "s" : "", o.output);
+  if (!o.report.empty()) std::cout << fmt::format("  report {}\n", o.report);
+}
+
+void write_report(const MapOptions& o, const maps::FullTableResult& r) {
+  maps::ReportInfo info;
+  info.model = o.model;
+  info.max_interpolation_um = r.interpolation_um();
+  info.interpolation = maps::interpolation_name(r.method);
+  info.build_seconds = r.summary.seconds;
+  AtomicOutput page(o.report, {}, maps::kOutputWording);
+  page.stream() << maps::map_report_html(r.table, info);
+  page.commit();
+}
+
+// --form full: build on the grid given or the coarsest within the
+// tolerances, check, write, report.
+int run_full(const MapOptions& o, const ErrorModel& model,
+             const maps::UncertaintySources& uncertainty) {
+  const Machine& m = model.machine();
+  const int threads = o.threads > 0
+                          ? o.threads
+                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const bool bar = isatty(2) != 0;
+  const maps::FullTableJob job = full_table_job(o, m, threads, uncertainty, bar);
+  const bool searching = bar && job.spacing.empty();
+  if (searching)
+    std::cerr << "map: searching the spacing for " << job.tolerance_um_or_default() << " um..."
+              << std::flush;
+  const maps::FullTableResult r = maps::build_full_table(model, job);
+  if (searching) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
+
+  if (o.output == "-") {
+    maps::write_table(std::cout, r.table);
+    std::cout.flush();
+  } else {
+    maps::save_table(o.output, r.table);
+  }
+  if (!o.report.empty()) write_report(o, r);
+  const maps::TableExtremes extremes = maps::table_extremes(r.table);
+  if (o.output == "-") return 0;  // stdout holds the table
+  if (o.json) {
+    print_json_summary(o, r, extremes, threads);
+    return 0;
+  }
+  print_table_text(o, r, extremes);
+  print_correction_text(o, r, threads);
+  return 0;
+}
+
+int run_map(const MapOptions& o) {
+  refuse_output_equal_to_input(o.output, {o.machine, o.errors, o.covariance}, maps::kOutputWording);
+  if (!o.report.empty())
+    refuse_output_equal_to_input(o.report, {o.machine, o.errors, o.output}, maps::kOutputWording);
+  if (o.output == "-" && !o.json && isatty(1))
+    throw std::invalid_argument(
+        "-o -: refusing to write a binary table to a terminal; "
+        "redirect standard output or give a file");
+  const Machine m = load_machine_json(o.machine);
+  const Formulation f =
+      o.model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
+  ErrorSet errors = load_errors(o.errors, parse_errors_format(o.errors_format));
+  const maps::UncertaintySources uncertainty = maps::uncertainty_sources(
+      errors, o.repeatability_um, o.repeatability_urad, o.covariance, m, f);
+  if (o.tolerance_urad > 0.0 && !m.has_rotary_axes())
+    throw std::invalid_argument(fmt::format(
+        "--tolerance-urad: {} has no rotary axes (its tables carry no tool-axis error); use "
+        "--tolerance-um",
+        m.name));
+  const ErrorModel model(m, std::move(errors), ModelOptions{f, OutsidePolicy::kError});
+  if (o.form == "factorized") return run_factorized(o, model);
+  return run_full(o, model, uncertainty);
 }
 
 Runner register_map(CLI::App& app) {
-  struct Opts {
-    std::string machine, errors, errors_format = "auto", spacing, output, interpolation = "linear",
-                                 model = "independent", form = "full";
-    std::string report, covariance;
-    double tolerance_um = 0.0, tolerance_urad = 0.0, repeatability_um = -1.0,
-           repeatability_urad = -1.0, max_table_gib = 2.0;
-    int threads = 0;
-    bool json = false;
-  };
-  auto o = std::make_shared<Opts>();
+  auto o = std::make_shared<MapOptions>();
   CLI::App* sub = app.add_subcommand(
       "map",
       "Gridded table of the tool-tip error dv and the correction du over the travel "
@@ -161,287 +403,7 @@ Runner register_map(CLI::App& app) {
       "  volmap map --machine samples/machines/lei-hsu-xyzac.json "
       "--errors samples/errors/lei-hsu-xyzac.csv --tolerance-um 2 --tolerance-urad 2 -o xyzac.vmt");
 
-  return [o]() -> int {
-    maps::refuse_output_equal_to_input(o->output, {o->machine, o->errors, o->covariance});
-    if (!o->report.empty())
-      maps::refuse_output_equal_to_input(o->report, {o->machine, o->errors, o->output});
-    if (o->output == "-" && !o->json && isatty(1))
-      throw std::invalid_argument(
-          "-o -: refusing to write a binary table to a terminal; "
-          "redirect standard output or give a file");
-    const Machine m = load_machine_json(o->machine);
-    const Formulation f =
-        o->model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
-    ErrorSet errors = load_errors(o->errors, parse_errors_format(o->errors_format));
-    std::optional<maps::Repeatability> repeatability = maps::repeatability_from(errors);
-    if (o->repeatability_um >= 0.0 || o->repeatability_urad >= 0.0) {
-      if (!repeatability) repeatability.emplace();
-      if (o->repeatability_um >= 0.0) repeatability->translational_mm = o->repeatability_um * 1e-3;
-      if (o->repeatability_urad >= 0.0) repeatability->angular_rad = o->repeatability_urad * 1e-6;
-    }
-    std::optional<maps::ParameterCovariance> covariance;
-    if (!o->covariance.empty()) {
-      std::ifstream in(o->covariance);
-      if (!in)
-        throw std::invalid_argument(
-            fmt::format("{}: cannot open the identify report", o->covariance));
-      nlohmann::json report;
-      try {
-        report = nlohmann::json::parse(in);
-      } catch (const nlohmann::json::parse_error& e) {
-        throw std::invalid_argument(fmt::format("{}: not JSON ({})", o->covariance, e.what()));
-      }
-      covariance = maps::covariance_from_identify(report, m, f, o->covariance);
-      if (!repeatability) repeatability.emplace();
-    }
-    if (o->tolerance_urad > 0.0 && !m.has_rotary_axes())
-      throw std::invalid_argument(fmt::format(
-          "--tolerance-urad: {} has no rotary axes (its tables carry no tool-axis error); use "
-          "--tolerance-um",
-          m.name));
-    const ErrorModel model(m, std::move(errors), ModelOptions{f, OutsidePolicy::kError});
-    if (o->form == "factorized") {
-      if (!o->spacing.empty() || o->tolerance_um > 0.0 || o->tolerance_urad > 0.0 ||
-          !o->report.empty())
-        throw std::invalid_argument(
-            "--form factorized is exact and has no grid: --spacing, --tolerance-um, "
-            "--tolerance-urad and --report apply to --form full");
-      nlohmann::ordered_json definition;
-      {
-        std::ifstream in(o->machine);
-        definition = nlohmann::ordered_json::parse(in);
-      }
-      const maps::FactorizedTable t = maps::make_factorized(definition, model);
-      const std::string text = maps::factorized_json(t);
-      if (o->output == "-") {
-        std::cout << text;
-        return 0;
-      }
-      maps::save_factorized(o->output, t);
-      if (o->json) {
-        nlohmann::ordered_json doc;
-        doc["table"] = o->output;
-        doc["form"] = "factorized";
-        doc["machine"] = t.machine_name;
-        doc["errors"] = t.errors_source;
-        doc["model"] = o->model;
-        doc["values"] = maps::factorized_values(t);
-        doc["bytes"] = text.size();
-        std::cout << doc.dump(2) << "\n";
-      } else {
-        std::cout << fmt::format(
-            "Factorized table of {} ({} model, errors {}): 1-D component-error tables and "
-            "location errors, {} values, exact for the rigid-body model; written {} ({} bytes)\n",
-            t.machine_name, o->model, t.errors_source, maps::factorized_values(t), o->output,
-            text.size());
-      }
-      return 0;
-    }
-    const maps::Interpolation method = maps::parse_interpolation(o->interpolation);
-    const int threads = o->threads > 0
-                            ? o->threads
-                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-
-    maps::BuildOptions build;
-    build.threads = threads;
-    build.max_bytes = static_cast<std::size_t>(o->max_table_gib * double(1 << 30));
-    build.repeatability = repeatability;
-    build.covariance = covariance ? &*covariance : nullptr;
-    const bool bar = isatty(2) != 0;
-    if (bar) {
-      build.progress = [](std::int64_t done, std::int64_t total) {
-        const int width = 40;
-        const int filled = total > 0 ? static_cast<int>(width * done / total) : width;
-        std::cerr << fmt::format("\rmap [{:<{}}] {:3d}%",
-                                 std::string(static_cast<size_t>(filled), '#'), width,
-                                 total > 0 ? static_cast<int>(100 * done / total) : 100)
-                  << std::flush;
-        if (done == total) std::cerr << "\r" << std::string(52, ' ') << "\r" << std::flush;
-      };
-    }
-    maps::CheckOptions check;
-    check.method = method;
-    check.threads = threads;
-
-    maps::VolumetricTable table;
-    double tolerance_urad = 0.0;
-    int grids_tried = 0;
-    maps::BuildSummary summary;
-    maps::CheckResult checked;
-    if (!o->spacing.empty()) {
-      table = maps::build_table(model, parse_spacing(m, o->spacing), build, &summary);
-      checked = maps::check_table(model, table, check);
-      // Five-axis: the tolerance is on dv; du is reported beside.
-      table.achieved_um = table.pose_correction() ? checked.max_dv_um : checked.max_um();
-      table.checked_with = method;
-    } else {
-      const double tol = o->tolerance_um > 0.0 ? o->tolerance_um : 1.0;
-      const double tol_urad = o->tolerance_urad > 0.0 ? o->tolerance_urad : 1.0;
-      if (bar) std::cerr << "map: searching the spacing for " << tol << " um..." << std::flush;
-      maps::AutoSpacingResult r =
-          maps::build_for_tolerance(model, tol, check, build, build.max_bytes, tol_urad);
-      tolerance_urad = m.has_rotary_axes() ? tol_urad : 0.0;
-      grids_tried = r.tables_tried;
-      if (bar) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
-      table = std::move(r.table);
-      summary = r.build;
-      checked = r.check;
-    }
-
-    if (o->output == "-") {
-      maps::write_table(std::cout, table);
-      std::cout.flush();
-    } else {
-      maps::save_table(o->output, table);
-    }
-
-    if (!o->report.empty()) {
-      maps::ReportInfo info;
-      info.model = o->model;
-      info.max_interpolation_um = table.pose_correction() ? checked.max_dv_um : checked.max_um();
-      info.interpolation = maps::interpolation_name(method);
-      info.build_seconds = summary.seconds;
-      maps::OutputFile page(o->report);
-      page.stream() << maps::map_report_html(table, info);
-      page.commit();
-    }
-
-    const double interpolation_um = table.pose_correction() ? checked.max_dv_um : checked.max_um();
-    // Largest |dv|, |du| and u over the nodes (um; orientation and rotary
-    // corrections urad).
-    double max_dv = 0.0, max_du = 0.0, max_u = 0.0, max_dq = 0.0, max_du_rot = 0.0;
-    const std::optional<int> ux = table.channel("ux");
-    const std::optional<int> uc = table.channel("u");
-    const std::optional<int> ei = table.channel("ei");
-    const bool five = table.pose_correction();
-    std::vector<int> rotary_du;
-    if (five)
-      for (const maps::GridAxis& g : table.grid)
-        if (is_rotary(g.axis))
-          rotary_du.push_back(*table.channel(maps::correction_channel_name(g.axis)));
-    for (int layer = 0; layer < table.layer_count(); ++layer)
-      for (std::int64_t n = 0; n < table.node_count(); ++n) {
-        const double* v = table.at(layer, n);
-        max_dv = std::max(max_dv, std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * 1e3);
-        if (uc) max_u = std::max(max_u, v[*uc] * 1e3);
-        if (ei) {
-          const double* q = v + *ei;
-          max_dq = std::max(max_dq, std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]) * 1e6);
-        }
-        if (!rotary_du.empty()) {
-          double r2 = 0.0;
-          for (int c : rotary_du) r2 += v[c] * v[c];
-          max_du_rot = std::max(max_du_rot, std::sqrt(r2) * 1e6);
-        }
-        if (ux) {
-          const double* d = v + *ux;
-          max_du = std::max(max_du, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * 1e3);
-        }
-      }
-
-    if (o->output == "-") return 0;  // stdout holds the table
-    if (o->json) {
-      nlohmann::ordered_json doc;
-      doc["table"] = o->output;
-      doc["form"] = "full";
-      doc["machine"] = table.machine_name;
-      doc["errors"] = table.errors_source;
-      doc["model"] = o->model;
-      nlohmann::ordered_json grid = nlohmann::ordered_json::array();
-      for (const maps::GridAxis& g : table.grid)
-        grid.push_back({{"axis", std::string(1, axis_char(g.axis))},
-                        {"unit", unit(g.axis)},
-                        {"start", display(g.axis, g.start)},
-                        {"end", display(g.axis, g.end)},
-                        {"spacing", display(g.axis, g.spacing)},
-                        {"nodes", g.count},
-                        {"uniform", g.uniform()}});
-      doc["grid"] = grid;
-      doc["nodes"] = table.node_count();
-      nlohmann::ordered_json layers = nlohmann::ordered_json::array();
-      for (int l = 0; l < table.layer_count(); ++l) layers.push_back(layer_name(table, l));
-      doc["layers"] = layers;
-      doc["channels"] = table.channels;
-      doc["bytes"] = table.size_bytes();
-      doc["max_dv_um"] = max_dv;
-      if (ux) doc["max_du_um"] = max_du;
-      if (ei) doc["max_dq_urad"] = max_dq;
-      if (five) doc["max_du_rotary_urad"] = max_du_rot;
-      if (uc) doc["max_u_um"] = max_u;
-      if (!o->report.empty()) doc["report"] = o->report;
-      doc["interpolation"] = maps::interpolation_name(method);
-      if (table.tolerance_um > 0.0) doc["tolerance_um"] = table.tolerance_um;
-      doc["max_interpolation_error_um"] = interpolation_um;
-      doc["max_interpolation_error_dv_um"] = checked.max_dv_um;
-      if (ux) doc["max_interpolation_error_du_um"] = checked.max_du_um;
-      if (tolerance_urad > 0.0) doc["tolerance_urad"] = tolerance_urad;
-      if (ei) doc["max_interpolation_error_dq_urad"] = checked.max_dq_urad;
-      if (five) {
-        doc["max_interpolation_error_du_rotary_urad"] = checked.max_du_rot_urad;
-        doc["du_check_points_near_singular_excluded"] = checked.du_excluded;
-        doc["correction_singular_nodes"] = summary.correction_singular;
-        doc["correction_max_residual_um"] = summary.correction_max_residual_mm * 1e3;
-      }
-      doc["check_points_per_layer"] = checked.points;
-      if (grids_tried > 0) doc["spacing_search_grids"] = grids_tried;
-      doc["correction_clamped_nodes"] = summary.correction_clamped;
-      doc["build_seconds"] = summary.seconds;
-      doc["threads"] = threads;
-      std::cout << doc.dump(2) << "\n";
-      return 0;
-    }
-    std::cout << fmt::format("Volumetric table of {} ({} model, errors {})\n",
-                             table.machine_name.empty() ? o->machine : table.machine_name, o->model,
-                             table.errors_source);
-    for (const maps::GridAxis& g : table.grid)
-      std::cout << fmt::format("  {}  {:g}..{:g} {}  spacing {:g}  {} nodes{}\n", axis_char(g.axis),
-                               display(g.axis, g.start), display(g.axis, g.end), unit(g.axis),
-                               display(g.axis, g.spacing), g.count,
-                               g.uniform() ? "" : " (last cell shorter)");
-    std::string layers;
-    for (int l = 0; l < table.layer_count(); ++l) layers += (l ? ", " : "") + layer_name(table, l);
-    std::cout << fmt::format("  {} nodes x {} direction layer{} ({}), {:.1f} MiB\n",
-                             table.node_count(), table.layer_count(),
-                             table.layer_count() > 1 ? "s" : "", layers,
-                             static_cast<double>(table.size_bytes()) / (1 << 20));
-    std::cout << fmt::format("  max |dv| {:.3f} um", max_dv);
-    if (ei) std::cout << fmt::format(", max |dQ| {:.3f} urad", max_dq);
-    if (ux) std::cout << fmt::format(", max |du| {:.3f} um", max_du);
-    if (five) std::cout << fmt::format(" and {:.3f} urad (rotary axes)", max_du_rot);
-    if (uc) std::cout << fmt::format(", max uncertainty u {:.3f} um", max_u);
-    std::cout << "\n";
-    std::cout << fmt::format(
-        "  interpolation error ({}) max {:.4f} um{} over {} cell centres and random points per "
-        "layer\n",
-        maps::interpolation_name(method), interpolation_um,
-        table.tolerance_um > 0.0 ? fmt::format(" (tolerance {:g} um)", table.tolerance_um) : "",
-        checked.points);
-    if (ei)
-      std::cout << fmt::format(
-          "  interpolation error of dQ max {:.4f} urad{}\n", checked.max_dq_urad,
-          tolerance_urad > 0.0 ? fmt::format(" (tolerance {:g} urad)", tolerance_urad) : "");
-    if (five)
-      std::cout << fmt::format(
-          "  interpolation error of du max {:.4f} um, {:.4f} urad (rotary), {} check points near "
-          "the singular position not compared; {} nodes at the singular position (outer axis's "
-          "correction suppressed), correction residual max {:.2g} um\n",
-          checked.max_du_um, checked.max_du_rot_urad, checked.du_excluded,
-          summary.correction_singular, summary.correction_max_residual_mm * 1e3);
-    if (summary.correction_clamped > 0 && five)
-      std::cout << fmt::format(
-          "  {} nodes' corrections reach beyond the travel of a limited axis "
-          "(errors there held at the travel end)\n",
-          summary.correction_clamped);
-    else if (summary.correction_clamped > 0)
-      std::cout << fmt::format(
-          "  {} nodes' corrections reach beyond the travel (error held at the "
-          "travel end)\n",
-          summary.correction_clamped);
-    std::cout << fmt::format("  built in {:.3f} s on {} thread{}; written {}\n", summary.seconds,
-                             threads, threads > 1 ? "s" : "", o->output);
-    if (!o->report.empty()) std::cout << fmt::format("  report {}\n", o->report);
-    return 0;
-  };
+  return [o]() -> int { return run_map(*o); };
 }
 
 }  // namespace

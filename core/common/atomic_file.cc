@@ -1,5 +1,6 @@
 #include "core/common/atomic_file.h"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -14,6 +15,10 @@ namespace volmap {
 namespace {
 std::atomic<unsigned> temp_counter{0};
 
+std::string error_message(const char* format, const std::string& path, const std::string& reason) {
+  return fmt::format(fmt::runtime(format), fmt::arg("path", path), fmt::arg("reason", reason));
+}
+
 std::filesystem::path normalised(const std::string& p) {
   std::error_code ec;
   std::filesystem::path out = std::filesystem::weakly_canonical(p, ec);
@@ -22,8 +27,8 @@ std::filesystem::path normalised(const std::string& p) {
 }
 }  // namespace
 
-void refuse_output_equal_to_input(const std::string& output,
-                                  const std::vector<std::string>& inputs) {
+void refuse_output_equal_to_input(const std::string& output, const std::vector<std::string>& inputs,
+                                  const AtomicOutputWording& wording) {
   if (output == "-") return;
   const std::filesystem::path out = normalised(output);
   for (const std::string& in : inputs) {
@@ -31,15 +36,16 @@ void refuse_output_equal_to_input(const std::string& output,
     std::error_code ec;
     const bool same_file = std::filesystem::equivalent(output, in, ec) && !ec;
     if (same_file || normalised(in) == out)
-      throw std::invalid_argument(output + ": the output is also an input (" + in +
-                                  "); write the output to another path");
+      throw std::invalid_argument(fmt::format(fmt::runtime(wording.output_is_input),
+                                              fmt::arg("output", output), fmt::arg("input", in)));
   }
 }
 
-AtomicOutput::AtomicOutput(std::string path, const std::vector<std::string>& inputs)
-    : path_(std::move(path)) {
-  refuse_output_equal_to_input(path_, inputs);
-  if (path_ == "-") {
+AtomicOutput::AtomicOutput(std::string path, const std::vector<std::string>& inputs,
+                           const AtomicOutputWording& wording)
+    : path_(std::move(path)), wording_(wording) {
+  refuse_output_equal_to_input(path_, inputs, wording_);
+  if (path_ == "-" && wording_.dash_is_stdout) {
     // Spooled: nothing reaches standard output before commit().
     to_stdout_ = true;
     std::error_code ec;
@@ -63,8 +69,7 @@ AtomicOutput::AtomicOutput(std::string path, const std::vector<std::string>& inp
   file_.open(temp_path_, std::ios::binary | std::ios::trunc);
   if (!file_) {
     const std::string reason = std::generic_category().message(errno);
-    throw std::runtime_error(path_ + ": cannot create the output (" + reason +
-                             "); check that the folder exists and is writable");
+    throw std::runtime_error(error_message(wording_.cannot_create, path_, reason));
   }
 }
 
@@ -103,14 +108,13 @@ void AtomicOutput::commit() {
   if (!ok || file_.fail()) {
     std::remove(temp_path_.c_str());
     committed_ = true;
-    throw std::runtime_error(path_ + ": write error; check the free space and the device");
+    throw std::runtime_error(error_message(wording_.write_error, path_, ""));
   }
   if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
     const std::string reason = std::generic_category().message(errno);
     std::remove(temp_path_.c_str());
     committed_ = true;
-    throw std::runtime_error(path_ + ": cannot rename the finished output into place (" + reason +
-                             ")");
+    throw std::runtime_error(error_message(wording_.cannot_rename, path_, reason));
   }
   committed_ = true;
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/kinematics/fixed_point.h"
 #include "core/kinematics/jacobian.h"
 
 namespace volmap {
@@ -74,6 +75,23 @@ class InverseJacobian {
   bool singular_ = false;
 };
 
+// The chord-Newton iterate: the correction du and the step J^-1 (F_e(u + du) - v)
+// subtracted to reach it (the stopping rule measures the step).
+struct ChordNewtonIterate {
+  AxisVector du;
+  AxisVector step;
+};
+
+// Whether the step's linear part (mm) and rotary part (rad) are both within
+// the tolerances.
+bool step_within_tolerances(const Machine& m, const AxisVector& step,
+                            const CorrectionOptions& options) {
+  double lin = 0, rot = 0;
+  for (int i = 0; i < m.axis_count(); ++i)
+    (is_rotary(m.axis_order[static_cast<size_t>(i)]) ? rot : lin) += step[i] * step[i];
+  return std::sqrt(lin) <= options.tolerance_mm && std::sqrt(rot) <= options.tolerance_rad;
+}
+
 }  // namespace
 
 bool correction_step(const Kinematics& kin, const PoseJacobian& J_v_u, const Eigen::Vector3d& dP_mm,
@@ -109,18 +127,23 @@ CorrectionResult CorrectionSolver::correct(const AxisVector& u, const ApproachDi
   ToolPose v;
   const ToolPose a0 = model_.actual_and_nominal(u, dir, v);
   Jinv.solve(-(a0.tip_mm - v.tip_mm), -(a0.axis - v.axis), r.du);
-  r.iterations = 1;
-  AxisVector step(m.axis_count());
-  while (r.iterations < options_.max_iterations) {
-    const ToolPose a = model_.actual(u + r.du, dir);
-    Jinv.solve(a.tip_mm - v.tip_mm, a.axis - v.axis, step);
-    r.du -= step;
-    ++r.iterations;
-    double lin = 0, rot = 0;
-    for (int i = 0; i < m.axis_count(); ++i)
-      (is_rotary(m.axis_order[static_cast<size_t>(i)]) ? rot : lin) += step[i] * step[i];
-    if (std::sqrt(lin) <= options_.tolerance_mm && std::sqrt(rot) <= options_.tolerance_rad) break;
-  }
+  // Iterate to eq. 4 (core/kinematics/fixed_point.h), stopping once the
+  // step is within the tolerances.
+  ChordNewtonIterate x{r.du, AxisVector::Zero(m.axis_count())};
+  const FixedPointOutcome outcome = iterate_to_fixed_point(
+      x, FixedPointLimits{1, options_.max_iterations},
+      [&](const ChordNewtonIterate& previous) {
+        ChordNewtonIterate next{previous.du, AxisVector(m.axis_count())};
+        const ToolPose a = model_.actual(u + previous.du, dir);
+        Jinv.solve(a.tip_mm - v.tip_mm, a.axis - v.axis, next.step);
+        next.du -= next.step;
+        return next;
+      },
+      [&](const ChordNewtonIterate&, const ChordNewtonIterate& next) {
+        return step_within_tolerances(m, next.step, options_);
+      });
+  r.du = x.du;
+  r.iterations = outcome.iterations;
   if (options_.max_iterations > 1 || options_.residual) {
     const ToolPose a = model_.actual(u + r.du, dir);
     r.residual_mm = (a.tip_mm - v.tip_mm).norm();

@@ -40,6 +40,7 @@ struct AxisPitch {
   std::vector<std::int64_t> plus;       ///< increments, positive direction (node 0: 0)
   std::vector<std::int64_t> minus;      ///< same, negative direction (bidirectional only)
   std::int64_t minus_at_reference = 0;  ///< 3627, detection units
+  int magnification = 1;                ///< 3623
 };
 
 // Absolute correction relative to the reference node, quantized to units of
@@ -64,71 +65,57 @@ std::int64_t max_abs(const std::vector<std::int64_t>& v) {
   return m;
 }
 
-}  // namespace
-
-std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) {
-  require_three_axis(t, "fanuc");
-  const double unit = o.detection_unit_mm;
-  if (!(unit > 0.0) || !std::isfinite(unit))
-    throw ExportError("--format fanuc: the detection unit must be a positive number of mm");
-  const std::vector<std::int64_t> home = home_line_nodes(t, o);
-
-  // ---- pitch error compensation ----
-  std::vector<AxisPitch> axes(3);
-  std::vector<int> magnification(3, 1);
-  std::int64_t next = 0;
-  for (int j = 0; j < 3; ++j) {
-    const GridAxis& g = t.grid[static_cast<size_t>(j)];
-    const char k = axis_char(g.axis);
-    require_uniform(t, j, "fanuc");
-    const double interval_units = g.spacing / unit;
-    if (std::abs(interval_units - std::round(interval_units)) > 1e-6)
-      throw ExportError(fmt::format(
-          "--format fanuc: axis {}: the spacing {:g} mm is not a whole number of detection units "
-          "({:g} mm; parameter 3624 is an integer): build the table with a spacing that is",
-          k, g.spacing, unit));
-    AxisPitch& p = axes[static_cast<size_t>(j)];
-    p.base = next;
-    const std::int64_t h = home[static_cast<size_t>(j)];
-    const int c = du_channel(t, j);
-    const bool bidir = is_bidirectional(t, j);
-    const std::vector<double> plus = along_axis(t, home, j, c, bidir ? +1 : 0);
-    const std::vector<double> minus = bidir ? along_axis(t, home, j, c, -1) : std::vector<double>{};
-    int m = 1;
-    for (; m <= kMaxMagnification; ++m) {
-      p.plus = increments(plus, h, unit * m);
-      std::int64_t worst = max_abs(p.plus);
-      if (bidir) {
-        p.minus = increments(minus, h, unit * m);
-        worst = std::max(worst, max_abs(p.minus));
-      }
-      if (worst <= kMaxPerPoint) break;
+// Axis j's pitch error compensation: its points from data number `base`,
+// the magnification that keeps every point within +-7, the increments.
+AxisPitch axis_pitch(const VolumetricTable& t, const std::vector<std::int64_t>& home, int j,
+                     double unit, std::int64_t base) {
+  const GridAxis& g = t.grid[static_cast<size_t>(j)];
+  const char k = axis_char(g.axis);
+  require_uniform(t, j, "fanuc");
+  const double interval_units = g.spacing / unit;
+  if (std::abs(interval_units - std::round(interval_units)) > 1e-6)
+    throw ExportError(fmt::format(
+        "--format fanuc: axis {}: the spacing {:g} mm is not a whole number of detection units "
+        "({:g} mm; parameter 3624 is an integer): build the table with a spacing that is",
+        k, g.spacing, unit));
+  AxisPitch p;
+  p.base = base;
+  const std::int64_t h = home[static_cast<size_t>(j)];
+  const int c = du_channel(t, j);
+  const bool bidir = is_bidirectional(t, j);
+  const std::vector<double> plus = along_axis(t, home, j, c, bidir ? +1 : 0);
+  const std::vector<double> minus = bidir ? along_axis(t, home, j, c, -1) : std::vector<double>{};
+  int m = 1;
+  for (; m <= kMaxMagnification; ++m) {
+    p.plus = increments(plus, h, unit * m);
+    std::int64_t worst = max_abs(p.plus);
+    if (bidir) {
+      p.minus = increments(minus, h, unit * m);
+      worst = std::max(worst, max_abs(p.minus));
     }
-    if (m > kMaxMagnification) {
-      double step = 0.0;
-      for (size_t n = 1; n < plus.size(); ++n)
-        step = std::max(step, std::abs(plus[n] - plus[n - 1]));
-      throw ExportError(
-          fmt::format("--format fanuc: axis {}: the correction changes by up to {:.3f} um over one "
-                      "{:g} mm interval; "
-                      "a pitch compensation point takes at most +-{} x magnification {} detection "
-                      "units ({:g} mm): "
-                      "build the table with a finer spacing",
-                      k, step * 1e3, g.spacing, kMaxPerPoint, kMaxMagnification, unit));
-    }
-    magnification[static_cast<size_t>(j)] = m;
-    if (bidir)
-      p.minus_at_reference =
-          std::llround((minus[static_cast<size_t>(h)] - plus[static_cast<size_t>(h)]) / unit);
-    next += g.count * (bidir ? 2 : 1);
+    if (worst <= kMaxPerPoint) break;
   }
-  if (next > kMaxPitchPoints)
+  if (m > kMaxMagnification) {
+    double step = 0.0;
+    for (size_t n = 1; n < plus.size(); ++n) step = std::max(step, std::abs(plus[n] - plus[n - 1]));
     throw ExportError(
-        fmt::format("--format fanuc: {} pitch error compensation points needed, the control has {} "
-                    "(data numbers "
-                    "0..{}) for all axes together: build the table with a coarser spacing",
-                    next, kMaxPitchPoints, kMaxPitchPoints - 1));
+        fmt::format("--format fanuc: axis {}: the correction changes by up to {:.3f} um over one "
+                    "{:g} mm interval; "
+                    "a pitch compensation point takes at most +-{} x magnification {} detection "
+                    "units ({:g} mm): "
+                    "build the table with a finer spacing",
+                    k, step * 1e3, g.spacing, kMaxPerPoint, kMaxMagnification, unit));
+  }
+  p.magnification = m;
+  if (bidir)
+    p.minus_at_reference =
+        std::llround((minus[static_cast<size_t>(h)] - plus[static_cast<size_t>(h)]) / unit);
+  return p;
+}
 
+// fanuc_pitch.txt: the parameters, then the pitch data of every axis.
+std::string pitch_tape(const VolumetricTable& t, const std::vector<std::int64_t>& home,
+                       const std::vector<AxisPitch>& axes, double unit) {
   auto param = [&](int number, auto value_of) {
     std::string s = fmt::format("N{:05d}", number);
     for (int j = 0; j < 3; ++j) s += fmt::format("A{}P{}", j + 1, value_of(j));
@@ -143,7 +130,7 @@ std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) 
   tape += param(3622, [&](int j) {
     return axes[static_cast<size_t>(j)].base + t.grid[static_cast<size_t>(j)].count - 1;
   });
-  tape += param(3623, [&](int j) { return magnification[static_cast<size_t>(j)]; });
+  tape += param(3623, [&](int j) { return axes[static_cast<size_t>(j)].magnification; });
   tape += param(3624,
                 [&](int j) { return std::llround(t.grid[static_cast<size_t>(j)].spacing / unit); });
   tape += param(3626, [&](int j) {
@@ -159,7 +146,12 @@ std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) 
   }
   tape += "%\n";
 
-  // ---- 3D error compensation lattice ----
+  return tape;
+}
+
+// fanuc_3d.csv: the correction vector at every grid vertex (mean of the
+// direction layers), detection units.
+std::string lattice_csv(const VolumetricTable& t, double unit) {
   std::string lattice = fmt::format(
       "# volmap FANUC three-dimensional error compensation lattice: machine {}, errors {}\n"
       "# c*: correction added to the axis (commanded minus nominal), detection units of {:g} mm\n",
@@ -179,6 +171,12 @@ std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) 
     lattice += "\n";
   }
 
+  return lattice;
+}
+
+// FANUC.txt: the parameters, signs and units in words.
+std::string fanuc_notes(const VolumetricTable& t, const std::vector<std::int64_t>& home,
+                        const std::vector<AxisPitch>& axes, double unit) {
   std::string notes = fmt::format(
       "volmap export for FANUC: machine {}, errors {}\n"
       "Detection unit {:g} mm. Axis numbers A1 A2 A3 = X Y Z (renumber to the control's axes).\n\n"
@@ -208,15 +206,41 @@ std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) 
                         : fmt::format(" (negative direction {}..{})", p.base + g.count,
                                       p.base + 2 * g.count - 1),
         p.base + home[static_cast<size_t>(j)], g.node(home[static_cast<size_t>(j)]),
-        magnification[static_cast<size_t>(j)],
-        fixed(plus[static_cast<size_t>(home[static_cast<size_t>(j)])] * 1e3, 3));
+        p.magnification, fixed(plus[static_cast<size_t>(home[static_cast<size_t>(j)])] * 1e3, 3));
   }
   notes +=
       "\nfanuc_3d.csv (three-dimensional error compensation): the correction vector at every\n"
       "grid vertex, detection units, interpolated trilinearly by the control; enter the\n"
       "lattice origin, intervals and point counts of the grid in the 3D compensation parameters\n"
       "and the vectors as its compensation data (mean of the approach directions).\n";
-  return {{"fanuc_pitch.txt", tape}, {"fanuc_3d.csv", lattice}, {"FANUC.txt", notes}};
+  return notes;
+}
+
+}  // namespace
+
+std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) {
+  require_three_axis(t, "fanuc");
+  const double unit = o.detection_unit_mm;
+  if (!(unit > 0.0) || !std::isfinite(unit))
+    throw ExportError("--format fanuc: the detection unit must be a positive number of mm");
+  const std::vector<std::int64_t> home = home_line_nodes(t, o);
+
+  // ---- pitch error compensation ----
+  std::vector<AxisPitch> axes;
+  std::int64_t next = 0;
+  for (int j = 0; j < 3; ++j) {
+    axes.push_back(axis_pitch(t, home, j, unit, next));
+    next += t.grid[static_cast<size_t>(j)].count * (is_bidirectional(t, j) ? 2 : 1);
+  }
+  if (next > kMaxPitchPoints)
+    throw ExportError(
+        fmt::format("--format fanuc: {} pitch error compensation points needed, the control has {} "
+                    "(data numbers "
+                    "0..{}) for all axes together: build the table with a coarser spacing",
+                    next, kMaxPitchPoints, kMaxPitchPoints - 1));
+  return {{"fanuc_pitch.txt", pitch_tape(t, home, axes, unit)},
+          {"fanuc_3d.csv", lattice_csv(t, unit)},
+          {"FANUC.txt", fanuc_notes(t, home, axes, unit)}};
 }
 
 }  // namespace volmap::maps::exporters

@@ -73,6 +73,78 @@ std::string location_line(const std::string& name, double value) {
                  : fmt::format("  {} = {} mm\n", name, signed_fixed(value, 6));
 }
 
+// <K>.COM of axis `in`: the error of every axis (minus the correction) on
+// the home line at the nodes `keep` of K, with the BACKLASH column of a
+// bidirectional K.
+ExportFile axis_com_file(const VolumetricTable& t, const std::vector<std::int64_t>& home, int in,
+                         const std::vector<std::int64_t>& keep) {
+  const GridAxis& g = t.grid[static_cast<size_t>(in)];
+  const char k = axis_char(g.axis);
+  const bool bidir = is_bidirectional(t, in);
+  std::vector<std::vector<double>> col(3);
+  for (int out = 0; out < 3; ++out) {
+    col[static_cast<size_t>(out)] =
+        along_axis(t, home, in, du_channel(t, out), out == in && bidir ? +1 : 0);
+    for (double& v : col[static_cast<size_t>(out)]) v = -v;  // error = -correction
+    if (out != in) {
+      const double at_home =
+          col[static_cast<size_t>(out)][static_cast<size_t>(home[static_cast<size_t>(in)])];
+      for (double& v : col[static_cast<size_t>(out)]) v -= at_home;
+    }
+  }
+  std::vector<double> backlash;
+  if (bidir) {
+    backlash = along_axis(t, home, in, du_channel(t, in), -1);
+    for (double& v : backlash) v = -v;
+  }
+  std::vector<std::string> columns = {"X", "Y", "Z"};
+  for (int out = 0; out < 3; ++out)
+    columns[static_cast<size_t>(out)] =
+        std::string(1, axis_char(t.grid[static_cast<size_t>(out)].axis));
+  if (bidir) columns.push_back("BACKLASH");
+  ExportFile f;
+  f.name = fmt::format("{}.COM", k);
+  f.text = fmt::format("BEGIN {} MM\n", f.name) + header(columns);
+  std::int64_t nr = 0;
+  for (std::int64_t node : keep) {
+    std::vector<std::string> cells;
+    for (int out = 0; out < 3; ++out)
+      cells.push_back(signed_fixed(col[static_cast<size_t>(out)][static_cast<size_t>(node)], 4));
+    if (bidir) cells.push_back(signed_fixed(backlash[static_cast<size_t>(node)], 4));
+    f.text += row(nr++, signed_fixed(display_position(g.axis, g.node(node)), 4), cells);
+  }
+  f.text += "[END]\n";
+  return f;
+}
+
+// KC_<K>.COM: the component errors of axis g (all zero without errors) at the
+// table's nodes of K, resampled to the table limit.
+ExportFile kinematics_comp_file(const GridAxis& g, const AxisErrors* e) {
+  const std::vector<std::int64_t> keep = resampled_nodes(g);
+  ExportFile f;
+  f.name = fmt::format("KC_{}.COM", axis_char(g.axis));
+  f.text = fmt::format("BEGIN {} MM\n", f.name) + header({"C1", "C2", "C3", "C4", "C5", "C6"});
+  std::int64_t nr = 0;
+  for (std::int64_t node : keep) {
+    std::array<double, kComponentCount> v{};
+    if (e != nullptr) {
+      try {
+        evaluate_axis(*e, g.node(node), 0, OutsidePolicy::kError, v);
+      } catch (const std::out_of_range& ex) {
+        throw ExportError(
+            fmt::format("--format heidenhain: the errors do not cover the table: {}", ex.what()));
+      }
+    }
+    std::vector<std::string> cells;
+    for (int c = 0; c < kComponentCount; ++c)
+      cells.push_back(c < 3 ? signed_fixed(v[static_cast<size_t>(c)], 6)
+                            : signed_fixed(v[static_cast<size_t>(c)] * 180.0 / M_PI, 8));
+    f.text += row(nr++, signed_fixed(display_position(g.axis, g.node(node)), 4), cells);
+  }
+  f.text += "[END]\n";
+  return f;
+}
+
 }  // namespace
 
 std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions& o) {
@@ -110,42 +182,7 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
             "  {}.COM: {} nodes resampled to {} points (every {}th node and the travel "
             "end; at most {} points per table)\n",
             k, g.count, keep.size(), keep[1] - keep[0], kMaxPointsPerTable);
-      const bool bidir = is_bidirectional(t, in);
-      std::vector<std::vector<double>> col(3);
-      for (int out = 0; out < 3; ++out) {
-        col[static_cast<size_t>(out)] =
-            along_axis(t, home, in, du_channel(t, out), out == in && bidir ? +1 : 0);
-        for (double& v : col[static_cast<size_t>(out)]) v = -v;  // error = -correction
-        if (out != in) {
-          const double at_home =
-              col[static_cast<size_t>(out)][static_cast<size_t>(home[static_cast<size_t>(in)])];
-          for (double& v : col[static_cast<size_t>(out)]) v -= at_home;
-        }
-      }
-      std::vector<double> backlash;
-      if (bidir) {
-        backlash = along_axis(t, home, in, du_channel(t, in), -1);
-        for (double& v : backlash) v = -v;
-      }
-      std::vector<std::string> columns = {"X", "Y", "Z"};
-      for (int out = 0; out < 3; ++out)
-        columns[static_cast<size_t>(out)] =
-            std::string(1, axis_char(t.grid[static_cast<size_t>(out)].axis));
-      if (bidir) columns.push_back("BACKLASH");
-      ExportFile f;
-      f.name = fmt::format("{}.COM", k);
-      f.text = fmt::format("BEGIN {} MM\n", f.name) + header(columns);
-      std::int64_t nr = 0;
-      for (std::int64_t node : keep) {
-        std::vector<std::string> cells;
-        for (int out = 0; out < 3; ++out)
-          cells.push_back(
-              signed_fixed(col[static_cast<size_t>(out)][static_cast<size_t>(node)], 4));
-        if (bidir) cells.push_back(signed_fixed(backlash[static_cast<size_t>(node)], 4));
-        f.text += row(nr++, signed_fixed(display_position(g.axis, g.node(node)), 4), cells);
-      }
-      f.text += "[END]\n";
-      files.push_back(std::move(f));
+      files.push_back(axis_com_file(t, home, in, keep));
       cma_header += fmt::format(" {:<10}", std::string(1, k));
       cma_row += fmt::format(" {:<10}", fmt::format("{}.COM", k));
     }
@@ -170,30 +207,7 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
         "  do not enter it twice.\n";
     for (int a = 0; a < t.axis_count(); ++a) {
       const GridAxis& g = t.grid[static_cast<size_t>(a)];
-      const AxisErrors* e = errors.errors_of(g.axis);
-      const std::vector<std::int64_t> keep = resampled_nodes(g);
-      ExportFile f;
-      f.name = fmt::format("KC_{}.COM", axis_char(g.axis));
-      f.text = fmt::format("BEGIN {} MM\n", f.name) + header({"C1", "C2", "C3", "C4", "C5", "C6"});
-      std::int64_t nr = 0;
-      for (std::int64_t node : keep) {
-        std::array<double, kComponentCount> v{};
-        if (e != nullptr) {
-          try {
-            evaluate_axis(*e, g.node(node), 0, OutsidePolicy::kError, v);
-          } catch (const std::out_of_range& ex) {
-            throw ExportError(fmt::format(
-                "--format heidenhain: the errors do not cover the table: {}", ex.what()));
-          }
-        }
-        std::vector<std::string> cells;
-        for (int c = 0; c < kComponentCount; ++c)
-          cells.push_back(c < 3 ? signed_fixed(v[static_cast<size_t>(c)], 6)
-                                : signed_fixed(v[static_cast<size_t>(c)] * 180.0 / M_PI, 8));
-        f.text += row(nr++, signed_fixed(display_position(g.axis, g.node(node)), 4), cells);
-      }
-      f.text += "[END]\n";
-      files.push_back(std::move(f));
+      files.push_back(kinematics_comp_file(g, errors.errors_of(g.axis)));
     }
     if (!errors.location.empty()) {
       notes += "\nLocation errors (constants; kinematics description, Trans entries):\n";

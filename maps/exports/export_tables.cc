@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "maps/exports/exporters.h"
+#include "maps/tables/layer_name.h"
 
 namespace volmap::maps::exporters {
 
@@ -25,16 +26,6 @@ std::string value_column(const std::string& channel) {
   return channel + (is_angular_channel(channel) ? "_urad" : "_um");
 }
 
-std::string layer_tag(const VolumetricTable& t, int layer) {
-  std::string tag;
-  const ApproachDirections d = t.layer_directions(layer);
-  for (int a : t.bidirectional_axes)
-    tag += fmt::format("{}{}{}", tag.empty() ? "" : "_",
-                       axis_char(t.grid[static_cast<size_t>(a)].axis),
-                       d[static_cast<size_t>(a)] > 0 ? "pos" : "neg");
-  return tag;
-}
-
 }  // namespace
 
 std::vector<ExportFile> csv(const VolumetricTable& t, const ExportOptions&) {
@@ -48,7 +39,7 @@ std::vector<ExportFile> csv(const VolumetricTable& t, const ExportOptions&) {
   std::vector<std::int64_t> idx(static_cast<size_t>(t.axis_count()));
   for (int layer = 0; layer < t.layer_count(); ++layer) {
     ExportFile f;
-    const std::string tag = layer_tag(t, layer);
+    const std::string tag = layer_label(t, layer, "_", "pos", "neg");
     f.name = tag.empty() ? "table.csv" : "table_" + tag + ".csv";
     f.text.reserve(static_cast<size_t>(nodes) * 16 *
                    static_cast<size_t>(t.axis_count() + t.channel_count()));

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "maps/tables/output_file.h"
+#include "maps/tables/output_wording.h"
 
 namespace volmap::maps {
 
@@ -38,9 +38,10 @@ void write_export(const std::string& dir, const std::vector<ExportFile>& files) 
   if (ec || !fs::is_directory(dir))
     throw std::runtime_error(fmt::format("{}: cannot create the folder ({}); check the path", dir,
                                          ec ? ec.message() : "not a folder"));
-  std::vector<std::unique_ptr<OutputFile>> out;
+  std::vector<std::unique_ptr<AtomicOutput>> out;
   for (const ExportFile& f : files) {
-    out.push_back(std::make_unique<OutputFile>((fs::path(dir) / f.name).string()));
+    out.push_back(std::make_unique<AtomicOutput>((fs::path(dir) / f.name).string(),
+                                                 std::vector<std::string>{}, kOutputWording));
     out.back()->stream() << f.text;
     if (!out.back()->stream())
       throw std::runtime_error(fmt::format("{}: write error (disk full?)", out.back()->path()));

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "core/kinematics/fixed_point.h"
+
 namespace volmap::maps {
 
 ThreeAxisCorrection::ThreeAxisCorrection(const ErrorModel& model) : model_(model) {
@@ -43,22 +45,25 @@ ThreeAxisCorrection::Result ThreeAxisCorrection::solve(const AxisVector& x_nomin
                                                        const ApproachDirections& dir,
                                                        const Eigen::Vector3d& dP_nominal_mm) const {
   Result r;
-  Eigen::Vector3d du = -A_inv_ * dP_nominal_mm;  // first iterate: x_1 = x_n - A^-1 e(x_n)
+  // First iterate: x_1 = x_n - A^-1 e(x_n); then the fixed point
+  // (core/kinematics/fixed_point.h), the iterate clamped into travel.
+  Eigen::Vector3d du = -A_inv_ * dP_nominal_mm;
   AxisVector x(3);
-  for (r.iterations = 1; r.iterations < kMaxIterations; ++r.iterations) {
-    for (int i = 0; i < 3; ++i) {
-      const double q = x_nominal[i] + du[i];
-      x[i] = std::clamp(q, min_mm_[i], max_mm_[i]);
-      r.clamped |= x[i] != q;
-    }
-    const Eigen::Vector3d next = -A_inv_ * model_.exact(x, dir).dP_mm;
-    const double step = (next - du).cwiseAbs().maxCoeff();
-    du = next;
-    if (step <= kStepTolerance_mm) {
-      r.converged = true;
-      break;
-    }
-  }
+  const FixedPointOutcome outcome = iterate_to_fixed_point(
+      du, FixedPointLimits{1, kMaxIterations},
+      [&](const Eigen::Vector3d& previous) -> Eigen::Vector3d {
+        for (int i = 0; i < 3; ++i) {
+          const double q = x_nominal[i] + previous[i];
+          x[i] = std::clamp(q, min_mm_[i], max_mm_[i]);
+          r.clamped |= x[i] != q;
+        }
+        return -A_inv_ * model_.exact(x, dir).dP_mm;
+      },
+      [](const Eigen::Vector3d& previous, const Eigen::Vector3d& next) {
+        return (next - previous).cwiseAbs().maxCoeff() <= kStepTolerance_mm;
+      });
+  r.iterations = outcome.iterations;
+  r.converged = outcome.converged;
   r.du_mm = du;
   return r;
 }

@@ -17,8 +17,10 @@
 // near a travel end) is the error at the travel end: the iterate is clamped
 // into travel before evaluation and the solve reports it.
 //
-// This is maps/'s own definition for three-axis tables; a general five-axis
-// correction belongs to core/correction* (kinematics work).
+// This is maps/'s own definition for three-axis tables (the iterate clamped
+// into travel); the iteration is core/kinematics/fixed_point.h's, which the
+// five-axis correction (core/kinematics/correction.h) and the three-axis
+// post (postproc/three_axis/corrector.h) share.
 #pragma once
 
 #include <Eigen/Core>
@@ -35,7 +37,7 @@ class ThreeAxisCorrection {
 
   struct Result {
     Eigen::Vector3d du_mm = Eigen::Vector3d::Zero();
-    int iterations = 0;
+    int iterations = 0;      ///< evaluations of e, e(x_nominal) included
     bool clamped = false;    ///< an iterate was held at the travel end
     bool converged = false;  ///< last step below kStepTolerance_mm
   };

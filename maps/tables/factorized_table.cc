@@ -7,7 +7,7 @@
 
 #include "core/common/input_error.h"
 #include "core/model/machine_json.h"
-#include "maps/tables/output_file.h"
+#include "maps/tables/output_wording.h"
 
 namespace volmap::maps {
 
@@ -96,7 +96,7 @@ std::string factorized_json(const FactorizedTable& t) {
 }
 
 void save_factorized(const std::string& path, const FactorizedTable& t) {
-  OutputFile file(path);
+  AtomicOutput file(path, {}, kOutputWording);
   file.stream() << factorized_json(t);
   file.commit();
 }

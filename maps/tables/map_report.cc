@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/common/html.h"
+#include "maps/tables/layer_name.h"
 
 namespace volmap::maps {
 
@@ -56,9 +57,26 @@ struct Panel {
   bool magnitude = false;
 };
 
-}  // namespace
+// Node index of the per-axis node indices idx.
+std::int64_t node_of(const VolumetricTable& t, const std::vector<std::int64_t>& idx) {
+  std::int64_t n = 0, s = 1;
+  for (int d = 0; d < t.axis_count(); ++d) {
+    n += idx[static_cast<size_t>(d)] * s;
+    s *= t.grid[static_cast<size_t>(d)].count;
+  }
+  return n;
+}
 
-std::string map_report_html(const VolumetricTable& t, const ReportInfo& info, int layer) {
+// A panel's value at a node's channels v, in display units.
+double panel_value(const double* v, const Panel& p) {
+  if (!p.magnitude || p.channels.size() == 1) return v[p.channels[0]] * p.scale;
+  double s = 0.0;
+  for (int c : p.channels) s += v[c] * v[c];
+  return std::sqrt(s) * p.scale;
+}
+
+// The planes through the middle node: every pair of the first three axes.
+std::vector<Slice> middle_slices(const VolumetricTable& t) {
   const int dims = t.axis_count();
   std::vector<std::int64_t> mid(static_cast<size_t>(dims));
   for (int d = 0; d < dims; ++d)
@@ -67,7 +85,10 @@ std::string map_report_html(const VolumetricTable& t, const ReportInfo& info, in
   const int planar = std::min(dims, 3);
   for (int a = 0; a < planar; ++a)
     for (int b = a + 1; b < planar; ++b) slices.push_back({a, b, mid});
+  return slices;
+}
 
+std::vector<Panel> panels_of(const VolumetricTable& t) {
   std::vector<Panel> panels;
   panels.push_back({"ex (um)", {0}, 1e3, false});
   panels.push_back({"ey (um)", {1}, 1e3, false});
@@ -86,33 +107,11 @@ std::string map_report_html(const VolumetricTable& t, const ReportInfo& info, in
       panels.push_back({std::string(name) + " (urad)", {*c}, 1e6, false});
   if (const std::optional<int> u = t.channel("u"))
     panels.push_back({"u, standard uncertainty (um)", {*u}, 1e3, true});
+  return panels;
+}
 
-  auto node_of = [&](const std::vector<std::int64_t>& idx) {
-    std::int64_t n = 0, s = 1;
-    for (int d = 0; d < dims; ++d) {
-      n += idx[static_cast<size_t>(d)] * s;
-      s *= t.grid[static_cast<size_t>(d)].count;
-    }
-    return n;
-  };
-  auto value = [&](std::int64_t node, const Panel& p) {
-    const double* v = t.at(layer, node);
-    if (!p.magnitude || p.channels.size() == 1) return v[p.channels[0]] * p.scale;
-    double s = 0.0;
-    for (int c : p.channels) s += v[c] * v[c];
-    return std::sqrt(s) * p.scale;
-  };
-
-  std::string layer_text = "both directions";
-  if (!t.bidirectional_axes.empty()) {
-    layer_text.clear();
-    const ApproachDirections d = t.layer_directions(layer);
-    for (int a : t.bidirectional_axes)
-      layer_text += fmt::format("{}{}{}", layer_text.empty() ? "" : " ",
-                                axis_char(t.grid[static_cast<size_t>(a)].axis),
-                                d[static_cast<size_t>(a)] > 0 ? "+" : "-");
-  }
-
+// The page up to the first slice: title, style, the table's description.
+std::string page_head(const VolumetricTable& t, const ReportInfo& info, int layer) {
   std::string h;
   h += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n";
   h += fmt::format("<title>volmap map: {}</title>\n", html_escape(t.machine_name));
@@ -129,8 +128,8 @@ std::string map_report_html(const VolumetricTable& t, const ReportInfo& info, in
     h += fmt::format("<tr><td>axis {}</td><td>{:g} .. {:g} {}, spacing {:g}, {} nodes</td></tr>\n",
                      axis_char(g.axis), display(g.axis, g.start), display(g.axis, g.end),
                      unit(g.axis), display(g.axis, g.spacing), g.count);
-  h += fmt::format("<tr><td>layer shown</td><td>{} ({} of {})</td></tr>\n", layer_text, layer + 1,
-                   t.layer_count());
+  h += fmt::format("<tr><td>layer shown</td><td>{} ({} of {})</td></tr>\n", layer_name(t, layer),
+                   layer + 1, t.layer_count());
   if (info.max_interpolation_um >= 0)
     h += fmt::format("<tr><td>interpolation error</td><td>{:.4f} um ({})</td></tr>\n",
                      info.max_interpolation_um, html_escape(info.interpolation));
@@ -141,114 +140,159 @@ std::string map_report_html(const VolumetricTable& t, const ReportInfo& info, in
       "nominal, workpiece coordinates; "
       "u (ux uy uz) = commanded-position correction. Arrows: in-plane error, scaled so the longest "
       "is one cell (length in the caption).</p>\n";
+  return h;
+}
 
-  for (const Slice& s : slices) {
-    const GridAxis& ga = t.grid[static_cast<size_t>(s.a)];
-    const GridAxis& gb = t.grid[static_cast<size_t>(s.b)];
-    const std::vector<std::int64_t> ka = drawn_nodes(ga), kb = drawn_nodes(gb);
-    std::string fixed_text;
-    for (int d = 0; d < dims; ++d) {
-      if (d == s.a || d == s.b) continue;
-      const GridAxis& g = t.grid[static_cast<size_t>(d)];
-      fixed_text +=
-          fmt::format("{}{} = {:g} {}", fixed_text.empty() ? "" : ", ", axis_char(g.axis),
-                      display(g.axis, g.node(s.base[static_cast<size_t>(d)])), unit(g.axis));
+// [lo, hi] of the cell drawn around drawn node i of axis g.
+std::array<double, 2> cell_bounds(const std::vector<std::int64_t>& k, size_t i, const GridAxis& g) {
+  const double lo = i == 0 ? g.node(k[i]) : 0.5 * (g.node(k[i - 1]) + g.node(k[i]));
+  const double hi = i + 1 == k.size() ? g.node(k[i]) : 0.5 * (g.node(k[i]) + g.node(k[i + 1]));
+  return std::array<double, 2>{lo, hi};
+}
+
+// One slice as drawn: its axes, the nodes drawn on each, and the plane
+// scaled to kPanel px on its longer side.
+struct SlicePlane {
+  SlicePlane(const VolumetricTable& t, int layer, const Slice& s)
+      : table(t),
+        layer(layer),
+        slice(s),
+        ga(t.grid[static_cast<size_t>(s.a)]),
+        gb(t.grid[static_cast<size_t>(s.b)]),
+        ka(drawn_nodes(ga)),
+        kb(drawn_nodes(gb)),
+        px(kPanel / std::max(ga.end - ga.start, gb.end - gb.start)),
+        W((ga.end - ga.start) * px),
+        H((gb.end - gb.start) * px),
+        idx(s.base) {}
+
+  double X(double qa) const { return 10 + (qa - ga.start) * px; }
+  double Y(double qb) const { return 10 + H - (qb - gb.start) * px; }  // vertical axis up
+  // The channels of the node at node indices ia, ib of the plane's axes.
+  const double* at(std::int64_t ia, std::int64_t ib) {
+    idx[static_cast<size_t>(slice.a)] = ia;
+    idx[static_cast<size_t>(slice.b)] = ib;
+    return table.at(layer, node_of(table, idx));
+  }
+  // "X = 100 mm, ..." for the axes the plane holds fixed.
+  std::string fixed_text() const {
+    std::string text;
+    for (int d = 0; d < table.axis_count(); ++d) {
+      if (d == slice.a || d == slice.b) continue;
+      const GridAxis& g = table.grid[static_cast<size_t>(d)];
+      text +=
+          fmt::format("{}{} = {:g} {}", text.empty() ? "" : ", ", axis_char(g.axis),
+                      display(g.axis, g.node(slice.base[static_cast<size_t>(d)])), unit(g.axis));
     }
-    h += fmt::format("<h2>Plane {}{}{}</h2>\n<div class=\"panels\">\n", axis_char(ga.axis),
-                     axis_char(gb.axis), fixed_text.empty() ? "" : " at " + fixed_text);
-    // Panel geometry: the plane scaled to kPanel on its longer side.
-    const double wa = ga.end - ga.start, wb = gb.end - gb.start;
-    const double px = kPanel / std::max(wa, wb);
-    const double W = wa * px, H = wb * px;
-    auto X = [&](double qa) { return 10 + (qa - ga.start) * px; };
-    auto Y = [&](double qb) { return 10 + H - (qb - gb.start) * px; };  // vertical axis up
-    std::vector<std::int64_t> idx = s.base;
-    auto cell_bounds = [&](const std::vector<std::int64_t>& k, size_t i, const GridAxis& g) {
-      const double lo = i == 0 ? g.node(k[i]) : 0.5 * (g.node(k[i - 1]) + g.node(k[i]));
-      const double hi = i + 1 == k.size() ? g.node(k[i]) : 0.5 * (g.node(k[i]) + g.node(k[i + 1]));
-      return std::array<double, 2>{lo, hi};
-    };
-    for (const Panel& p : panels) {
-      // Signed values: symmetric scale +-max|v|. Magnitudes: min .. max.
-      double vabs = 0.0, vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
-      for (std::int64_t ia : ka)
-        for (std::int64_t ib : kb) {
-          idx[static_cast<size_t>(s.a)] = ia;
-          idx[static_cast<size_t>(s.b)] = ib;
-          const double v = value(node_of(idx), p);
-          vabs = std::max(vabs, std::abs(v));
-          vmin = std::min(vmin, v);
-          vmax = std::max(vmax, v);
-        }
+    return text;
+  }
+  std::string svg_open() const {
+    return fmt::format(
+        "<figure>\n<svg width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" "
+        "role=\"img\">\n",
+        W + 20, H + 20, W + 20, H + 20);
+  }
+
+  const VolumetricTable& table;
+  const int layer;
+  const Slice& slice;
+  const GridAxis& ga;                      ///< horizontal axis
+  const GridAxis& gb;                      ///< vertical axis
+  const std::vector<std::int64_t> ka, kb;  ///< the nodes drawn on each
+  const double px;                         ///< px per mm (or rad)
+  const double W, H;                       ///< the plane's size, px
+  std::vector<std::int64_t> idx;           ///< node indices of the last at()
+};
+
+// A colour map of one panel over the plane.
+std::string colour_panel(SlicePlane& plane, const Panel& p) {
+  const GridAxis &ga = plane.ga, &gb = plane.gb;
+  const std::vector<std::int64_t>&ka = plane.ka, &kb = plane.kb;
+  // Signed values: symmetric scale +-max|v|. Magnitudes: min .. max.
+  double vabs = 0.0, vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
+  for (std::int64_t ia : ka)
+    for (std::int64_t ib : kb) {
+      const double v = panel_value(plane.at(ia, ib), p);
+      vabs = std::max(vabs, std::abs(v));
+      vmin = std::min(vmin, v);
+      vmax = std::max(vmax, v);
+    }
+  std::string h = plane.svg_open();
+  for (size_t i = 0; i < ka.size(); ++i) {
+    const std::array<double, 2> ra = cell_bounds(ka, i, ga);
+    for (size_t j = 0; j < kb.size(); ++j) {
+      const std::array<double, 2> rb = cell_bounds(kb, j, gb);
+      const double v = panel_value(plane.at(ka[i], kb[j]), p);
+      const double tcol = p.magnitude ? (vmax > vmin ? (v - vmin) / (vmax - vmin) : 0.0)
+                                      : (vabs > 0 ? v / vabs : 0.0);
       h += fmt::format(
-          "<figure>\n<svg width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" "
-          "role=\"img\">\n",
-          W + 20, H + 20, W + 20, H + 20);
-      for (size_t i = 0; i < ka.size(); ++i) {
-        const std::array<double, 2> ra = cell_bounds(ka, i, ga);
-        for (size_t j = 0; j < kb.size(); ++j) {
-          const std::array<double, 2> rb = cell_bounds(kb, j, gb);
-          idx[static_cast<size_t>(s.a)] = ka[i];
-          idx[static_cast<size_t>(s.b)] = kb[j];
-          const double v = value(node_of(idx), p);
-          const double tcol = p.magnitude ? (vmax > vmin ? (v - vmin) / (vmax - vmin) : 0.0)
-                                          : (vabs > 0 ? v / vabs : 0.0);
-          h += fmt::format(
-              "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
-              "fill=\"{}\"><title>{} = {:g}, {} = {:g}: {:.4f}</title></rect>\n",
-              X(ra[0]), Y(rb[1]), std::max(0.01, (ra[1] - ra[0]) * px),
-              std::max(0.01, (rb[1] - rb[0]) * px), colour(tcol), axis_char(ga.axis),
-              display(ga.axis, ga.node(ka[i])), axis_char(gb.axis),
-              display(gb.axis, gb.node(kb[j])), v);
-        }
-      }
-      h += "</svg>\n";
-      h += fmt::format("<figcaption>{}: {:.4f} .. {:.4f}{}</figcaption>\n</figure>\n",
-                       html_escape(p.title), vmin, vmax,
-                       p.magnitude ? " (white .. red)" : fmt::format(" (scale +-{:.4f})", vabs));
+          "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
+          "fill=\"{}\"><title>{} = {:g}, {} = {:g}: {:.4f}</title></rect>\n",
+          plane.X(ra[0]), plane.Y(rb[1]), std::max(0.01, (ra[1] - ra[0]) * plane.px),
+          std::max(0.01, (rb[1] - rb[0]) * plane.px), colour(tcol), axis_char(ga.axis),
+          display(ga.axis, ga.node(ka[i])), axis_char(gb.axis), display(gb.axis, gb.node(kb[j])),
+          v);
     }
+  }
+  h += "</svg>\n";
+  h += fmt::format("<figcaption>{}: {:.4f} .. {:.4f}{}</figcaption>\n</figure>\n",
+                   html_escape(p.title), vmin, vmax,
+                   p.magnitude ? " (white .. red)" : fmt::format(" (scale +-{:.4f})", vabs));
+  return h;
+}
+
+// The in-plane components of e as arrows (a plane of two linear axes).
+std::string vector_panel(SlicePlane& plane) {
+  const GridAxis &ga = plane.ga, &gb = plane.gb;
+  const std::vector<std::int64_t>&ka = plane.ka, &kb = plane.kb;
+  const int ca = static_cast<int>(ga.axis), cb = static_cast<int>(gb.axis);
+  double emax = 0.0;
+  for (std::int64_t ia : ka)
+    for (std::int64_t ib : kb) {
+      const double* v = plane.at(ia, ib);
+      emax = std::max(emax, std::hypot(v[ca], v[cb]));
+    }
+  const double cell = std::min(plane.W / std::max<double>(1, static_cast<double>(ka.size()) - 1),
+                               plane.H / std::max<double>(1, static_cast<double>(kb.size()) - 1));
+  const double k = emax > 0 ? cell / emax : 0.0;
+  std::string h = plane.svg_open();
+  h += fmt::format(
+      "<rect x=\"10\" y=\"10\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"none\" "
+      "stroke=\"#999\"/>\n",
+      plane.W, plane.H);
+  for (std::int64_t ia : ka)
+    for (std::int64_t ib : kb) {
+      const double* v = plane.at(ia, ib);
+      const double x0 = plane.X(ga.node(ia)), y0 = plane.Y(gb.node(ib));
+      const double x1 = x0 + v[ca] * k, y1 = y0 - v[cb] * k;
+      h += fmt::format(
+          "<line x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" stroke=\"#b22\" "
+          "stroke-width=\"1.2\"/>"
+          "<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"1.2\" fill=\"#333\"/>\n",
+          x0, y0, x1, y1, x0, y0);
+    }
+  h += "</svg>\n";
+  h += fmt::format(
+      "<figcaption>in-plane error (e{}, e{}): longest {:.4f} um = one "
+      "cell</figcaption>\n</figure>\n",
+      static_cast<char>(axis_char(ga.axis) - 'A' + 'a'),
+      static_cast<char>(axis_char(gb.axis) - 'A' + 'a'), emax * 1e3);
+  return h;
+}
+
+}  // namespace
+
+std::string map_report_html(const VolumetricTable& t, const ReportInfo& info, int layer) {
+  const std::vector<Panel> panels = panels_of(t);
+  std::string h = page_head(t, info, layer);
+  for (const Slice& s : middle_slices(t)) {
+    SlicePlane plane(t, layer, s);
+    const std::string fixed_text = plane.fixed_text();
+    h += fmt::format("<h2>Plane {}{}{}</h2>\n<div class=\"panels\">\n", axis_char(plane.ga.axis),
+                     axis_char(plane.gb.axis), fixed_text.empty() ? "" : " at " + fixed_text);
+    for (const Panel& p : panels) h += colour_panel(plane, p);
     // Vectors: the in-plane components of e (linear axes only).
-    if (!is_rotary(ga.axis) && !is_rotary(gb.axis)) {
-      const int ca = static_cast<int>(ga.axis), cb = static_cast<int>(gb.axis);
-      double emax = 0.0;
-      for (std::int64_t ia : ka)
-        for (std::int64_t ib : kb) {
-          idx[static_cast<size_t>(s.a)] = ia;
-          idx[static_cast<size_t>(s.b)] = ib;
-          const double* v = t.at(layer, node_of(idx));
-          emax = std::max(emax, std::hypot(v[ca], v[cb]));
-        }
-      const double cell = std::min(W / std::max<double>(1, static_cast<double>(ka.size()) - 1),
-                                   H / std::max<double>(1, static_cast<double>(kb.size()) - 1));
-      const double k = emax > 0 ? cell / emax : 0.0;
-      h += fmt::format(
-          "<figure>\n<svg width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" "
-          "role=\"img\">\n",
-          W + 20, H + 20, W + 20, H + 20);
-      h += fmt::format(
-          "<rect x=\"10\" y=\"10\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"none\" "
-          "stroke=\"#999\"/>\n",
-          W, H);
-      for (std::int64_t ia : ka)
-        for (std::int64_t ib : kb) {
-          idx[static_cast<size_t>(s.a)] = ia;
-          idx[static_cast<size_t>(s.b)] = ib;
-          const double* v = t.at(layer, node_of(idx));
-          const double x0 = X(ga.node(ia)), y0 = Y(gb.node(ib));
-          const double x1 = x0 + v[ca] * k, y1 = y0 - v[cb] * k;
-          h += fmt::format(
-              "<line x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" stroke=\"#b22\" "
-              "stroke-width=\"1.2\"/>"
-              "<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"1.2\" fill=\"#333\"/>\n",
-              x0, y0, x1, y1, x0, y0);
-        }
-      h += "</svg>\n";
-      h += fmt::format(
-          "<figcaption>in-plane error (e{}, e{}): longest {:.4f} um = one "
-          "cell</figcaption>\n</figure>\n",
-          static_cast<char>(axis_char(ga.axis) - 'A' + 'a'),
-          static_cast<char>(axis_char(gb.axis) - 'A' + 'a'), emax * 1e3);
-    }
+    if (!is_rotary(plane.ga.axis) && !is_rotary(plane.gb.axis)) h += vector_panel(plane);
     h += "</div>\n";
   }
   h += "</body>\n</html>\n";

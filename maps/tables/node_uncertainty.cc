@@ -7,9 +7,9 @@
 #include <cmath>
 #include <map>
 #include <stdexcept>
-#include <thread>
 #include <vector>
 
+#include "core/common/parallel.h"
 #include "core/model/gain_evaluator.h"
 
 namespace volmap::maps {
@@ -139,9 +139,9 @@ void fill_uncertainty(const ErrorModel& model, VolumetricTable& table, const Rep
   if (covariance != nullptr)
     for (int k : covariance->gain_index) variance[static_cast<std::size_t>(k)] = 0.0;
   const std::int64_t nodes = table.node_count();
-  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  threads =
-      static_cast<int>(std::min<std::int64_t>(threads, std::max<std::int64_t>(1, nodes / 1024)));
+  // Chunks of at least 1024 nodes, one per thread.
+  const std::int64_t chunks =
+      std::min<std::int64_t>(thread_count(threads), std::max<std::int64_t>(1, nodes / 1024));
   auto work = [&](std::int64_t first, std::int64_t last) {
     GainEvaluator gains(model.machine(), model.options().formulation);
     for (std::int64_t n = first; n < last; ++n) {
@@ -162,10 +162,9 @@ void fill_uncertainty(const ErrorModel& model, VolumetricTable& table, const Rep
       for (int layer = 0; layer < table.layer_count(); ++layer) table.at(layer, n)[*channel] = u;
     }
   };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t)
-    pool.emplace_back(work, nodes * t / threads, nodes * (t + 1) / threads);
-  for (std::thread& t : pool) t.join();
+  parallel_for(chunks, static_cast<int>(chunks), [&](std::int64_t chunk, int) {
+    work(nodes * chunk / chunks, nodes * (chunk + 1) / chunks);
+  });
 }
 
 }  // namespace volmap::maps

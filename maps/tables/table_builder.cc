@@ -3,86 +3,18 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <exception>
 #include <limits>
-#include <mutex>
 #include <optional>
 #include <stdexcept>
-#include <thread>
 
+#include "core/common/parallel.h"
 #include "maps/tables/axis_correction.h"
 
 namespace volmap::maps {
 
 namespace {
-
-int thread_count(int requested) {
-  if (requested > 0) return requested;
-  const unsigned hw = std::thread::hardware_concurrency();
-  return hw == 0 ? 1 : static_cast<int>(hw);
-}
-
-// Runs work(item, worker) for item in [0, items) on `threads` threads,
-// handing out items by an atomic counter. The first exception in item order
-// wins (so the error does not depend on the thread count); remaining items
-// are skipped. progress (may be empty) is called from this thread.
-template <class Work>
-void parallel_items(std::int64_t items, int threads, Work&& work,
-                    const std::function<void(std::int64_t, std::int64_t)>& progress) {
-  std::atomic<std::int64_t> next{0}, done{0};
-  std::atomic<bool> failed{false};
-  std::mutex error_mutex;
-  std::int64_t error_item = std::numeric_limits<std::int64_t>::max();
-  std::exception_ptr error;
-  auto run = [&](int worker) {
-    while (!failed.load(std::memory_order_relaxed)) {
-      const std::int64_t item = next.fetch_add(1, std::memory_order_relaxed);
-      if (item >= items) break;
-      try {
-        work(item, worker);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (item < error_item) {
-          error_item = item;
-          error = std::current_exception();
-        }
-        failed.store(true);
-      }
-      done.fetch_add(1, std::memory_order_relaxed);
-    }
-  };
-  threads = static_cast<int>(std::max<std::int64_t>(1, std::min<std::int64_t>(threads, items)));
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<size_t>(threads));
-  for (int t = 0; t < threads; ++t) pool.emplace_back(run, t);
-  if (progress) {
-    while (done.load() < items && !failed.load()) {
-      progress(done.load(), items);
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-  }
-  for (std::thread& t : pool) t.join();
-  if (error) {
-    // Items before the failing one may not have run when another thread
-    // failed first: rerun them in order on this thread so that the reported
-    // error is the lowest failing item's, whatever the thread count.
-    // (Only on failure; items are independent and idempotent.)
-    std::exception_ptr first = error;
-    for (std::int64_t item = 0; item < error_item; ++item) {
-      try {
-        work(item, 0);
-      } catch (...) {
-        first = std::current_exception();
-        break;
-      }
-    }
-    std::rethrow_exception(first);
-  }
-  if (progress) progress(items, items);
-}
 
 bool is_three_axis(const VolumetricTable& t) { return t.three_axis_correction(); }
 
@@ -144,7 +76,7 @@ void fill_table(const ErrorModel& model, VolumetricTable& table, const BuildOpti
   std::vector<std::int64_t> singular(static_cast<size_t>(threads), 0);
   std::vector<double> residual(static_cast<size_t>(threads), 0.0);
 
-  parallel_items(
+  parallel_for(
       rows, threads,
       [&](std::int64_t row, int worker) {
         const int layer = static_cast<int>(row / rows_per_layer);
@@ -305,7 +237,7 @@ CheckResult check_table(const ErrorModel& model, const VolumetricTable& table,
     std::int64_t worst_point = -1, excluded = 0;
   };
   std::vector<BlockMax> block_max(static_cast<size_t>(blocks));
-  parallel_items(
+  parallel_for(
       blocks, threads,
       [&](std::int64_t block, int) {
         BlockMax bm;

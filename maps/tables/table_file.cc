@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include "core/common/input_error.h"
-#include "maps/tables/output_file.h"
+#include "maps/tables/output_wording.h"
 
 namespace volmap::maps {
 
@@ -139,10 +139,61 @@ void write_table(std::ostream& out, const VolumetricTable& t) {
 }
 
 void save_table(const std::string& path, const VolumetricTable& table) {
-  OutputFile file(path);
+  AtomicOutput file(path, {}, kOutputWording);
   write_table(file.stream(), table);
   file.commit();
 }
+
+namespace {
+
+// Axis i of the grid: its letter, flags, start, spacing, end and node
+// count, checked against each other.
+GridAxis read_grid_axis(Reader& r, std::uint32_t i) {
+  GridAxis g;
+  const char letter = static_cast<char>(r.uint<std::uint8_t>("an axis letter"));
+  const std::optional<AxisName> a = axis_from_char(letter);
+  if (!a)
+    r.fail(fmt::format("axis {}: letter '{}' is not X Y Z A B C; the file is damaged", i, letter));
+  g.axis = *a;
+  g.periodic = r.uint<std::uint8_t>("an axis flag") != 0;
+  r.uint<std::uint16_t>("a reserved field");
+  r.uint<std::uint32_t>("a reserved field");
+  g.start = r.f64("an axis start");
+  g.spacing = r.f64("an axis spacing");
+  g.end = r.f64("an axis end");
+  g.count = static_cast<std::int64_t>(r.uint<std::uint64_t>("an axis node count"));
+  std::int64_t expected = -1;
+  try {
+    expected = node_count(g.start, g.spacing, g.end);
+  } catch (const std::invalid_argument& e) {
+    r.fail(fmt::format("axis {}: {}; the file is damaged", letter, e.what()));
+  }
+  if (expected != g.count)
+    r.fail(fmt::format(
+        "axis {}: {} nodes, but start {} spacing {} end {} give {}; the file is damaged", letter,
+        g.count, g.start, g.spacing, g.end, expected));
+  return g;
+}
+
+// Checks the remaining size before allocating (seekable streams): the values
+// and the checksum, nothing more.
+void check_remaining_size(Reader& r, std::istream& in, std::uint64_t expected) {
+  const std::streampos here = in.tellg();
+  if (here != std::streampos(-1)) {
+    in.seekg(0, std::ios::end);
+    const std::streampos end = in.tellg();
+    in.seekg(here);
+    const std::uint64_t remaining = static_cast<std::uint64_t>(end - here);
+    if (remaining != expected * 8 + 8)
+      r.fail(
+          fmt::format("{} bytes follow the header, expected {}; the file is {}; build it again "
+                      "with volmap map",
+                      remaining, expected * 8 + 8,
+                      remaining < expected * 8 + 8 ? "truncated" : "followed by extra bytes"));
+  }
+}
+
+}  // namespace
 
 VolumetricTable read_table(std::istream& in, const std::string& file) {
   Reader r(in, file);
@@ -181,33 +232,7 @@ VolumetricTable read_table(std::istream& in, const std::string& file) {
   t.achieved_um = r.f64("the achieved error");
   t.machine_name = r.str("the machine name");
   t.errors_source = r.str("the errors file name");
-  for (std::uint32_t i = 0; i < axes; ++i) {
-    GridAxis g;
-    const char letter = static_cast<char>(r.uint<std::uint8_t>("an axis letter"));
-    const std::optional<AxisName> a = axis_from_char(letter);
-    if (!a)
-      r.fail(
-          fmt::format("axis {}: letter '{}' is not X Y Z A B C; the file is damaged", i, letter));
-    g.axis = *a;
-    g.periodic = r.uint<std::uint8_t>("an axis flag") != 0;
-    r.uint<std::uint16_t>("a reserved field");
-    r.uint<std::uint32_t>("a reserved field");
-    g.start = r.f64("an axis start");
-    g.spacing = r.f64("an axis spacing");
-    g.end = r.f64("an axis end");
-    g.count = static_cast<std::int64_t>(r.uint<std::uint64_t>("an axis node count"));
-    std::int64_t expected = -1;
-    try {
-      expected = node_count(g.start, g.spacing, g.end);
-    } catch (const std::invalid_argument& e) {
-      r.fail(fmt::format("axis {}: {}; the file is damaged", letter, e.what()));
-    }
-    if (expected != g.count)
-      r.fail(fmt::format(
-          "axis {}: {} nodes, but start {} spacing {} end {} give {}; the file is damaged", letter,
-          g.count, g.start, g.spacing, g.end, expected));
-    t.grid.push_back(g);
-  }
+  for (std::uint32_t i = 0; i < axes; ++i) t.grid.push_back(read_grid_axis(r, i));
   for (std::uint32_t c = 0; c < channels; ++c) t.channels.push_back(r.str("a channel name"));
   if (t.channels[0] != "ex" || t.channels[1] != "ey" || t.channels[2] != "ez")
     r.fail("the first channels are not ex, ey, ez; the file is damaged");
@@ -233,20 +258,7 @@ VolumetricTable read_table(std::istream& in, const std::string& file) {
       static_cast<std::uint64_t>(nodes) * static_cast<std::uint64_t>(t.layer_count()) * channels;
   if (count != expected)
     r.fail(fmt::format("{} values, but the grid needs {}; the file is damaged", count, expected));
-  // Check the remaining size before allocating (seekable streams).
-  const std::streampos here = in.tellg();
-  if (here != std::streampos(-1)) {
-    in.seekg(0, std::ios::end);
-    const std::streampos end = in.tellg();
-    in.seekg(here);
-    const std::uint64_t remaining = static_cast<std::uint64_t>(end - here);
-    if (remaining != expected * 8 + 8)
-      r.fail(
-          fmt::format("{} bytes follow the header, expected {}; the file is {}; build it again "
-                      "with volmap map",
-                      remaining, expected * 8 + 8,
-                      remaining < expected * 8 + 8 ? "truncated" : "followed by extra bytes"));
-  }
+  check_remaining_size(r, in, expected);
   t.values.resize(static_cast<size_t>(count));
   if constexpr (std::endian::native == std::endian::little) {
     r.bytes(t.values.data(), t.values.size() * sizeof(double), "the values");

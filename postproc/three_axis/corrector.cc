@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/kinematics/fixed_point.h"
 #include "maps/tables/volumetric_table.h"
 
 namespace volmap::post {
@@ -61,14 +62,10 @@ double operator_norm(const Eigen::Matrix3d& A) {
   return Eigen::JacobiSVD<Eigen::Matrix3d>(A).singularValues()(0);
 }
 
-}  // namespace
-
-Corrector::Corrector(const Machine& machine, const ErrorSet& errors, double tool_length_mm,
-                     OutsidePolicy outside) {
-  if (machine.axis_count() != 3 || machine.has_rotary_axes())
-    throw std::invalid_argument(
-        "the three-axis post-processor needs a machine with axes X, Y, Z only");
-  // Reference tool: machine coordinates are axis values. Tip is affine in u.
+// d(machine coordinate)/d(tip, workpiece frame) of a three-linear-axis
+// machine: the inverse of d tip / d u, exact by differences since the tip is
+// affine in u.
+Eigen::Matrix3d machine_per_tip(const Machine& machine) {
   const AxisVector zero = AxisVector::Zero(3);
   const Eigen::Vector3d tip0 = nominal_forward(machine, zero).tip_mm;
   Eigen::Matrix3d A;  // d tip / d u
@@ -80,7 +77,20 @@ Corrector::Corrector(const Machine& machine, const ErrorSet& errors, double tool
   const Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
   if (!lu.isInvertible())
     throw std::invalid_argument("the machine's linear axes do not span space");
-  M_u_tip_ = lu.inverse();
+  return lu.inverse();
+}
+
+}  // namespace
+
+Corrector::Corrector(const Machine& machine, const ErrorSet& errors, double tool_length_mm,
+                     OutsidePolicy outside) {
+  if (machine.axis_count() != 3 || machine.has_rotary_axes())
+    throw std::invalid_argument(
+        "the three-axis post-processor needs a machine with axes X, Y, Z only");
+  // Reference tool: machine coordinates are axis values.
+  M_u_tip_ = machine_per_tip(machine);
+  const AxisVector zero = AxisVector::Zero(3);
+  const Eigen::Vector3d tip0 = nominal_forward(machine, zero).tip_mm;
   Machine with_tool = machine;
   if (std::isnan(with_tool.measurement_tool_length_mm))
     with_tool.measurement_tool_length_mm = machine.tool_length_mm;
@@ -123,18 +133,7 @@ Corrector::Corrector(const Machine& machine, const maps::VolumetricTable& table,
   for (int c = 0; c < 3; ++c)
     if (table.channel(std::string("e") + "xyz"[c]) != c)
       throw std::invalid_argument("the table's first channels are not ex ey ez");
-  const AxisVector zero = AxisVector::Zero(3);
-  const Eigen::Vector3d tip0 = nominal_forward(machine, zero).tip_mm;
-  Eigen::Matrix3d A;
-  for (int k = 0; k < 3; ++k) {
-    AxisVector e = zero;
-    e[k] = 1.0;
-    A.col(k) = nominal_forward(machine, e).tip_mm - tip0;
-  }
-  const Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
-  if (!lu.isInvertible())
-    throw std::invalid_argument("the machine's linear axes do not span space");
-  M_u_tip_ = lu.inverse();
+  M_u_tip_ = machine_per_tip(machine);
   axis_shift_mm_.setZero();  // the machine file's tool: machine coordinates are axis values
   zero_ = true;
   for (int layer = 0; layer < table.layer_count() && zero_; ++layer)
@@ -327,18 +326,20 @@ Eigen::Vector3d Corrector::command_for(const Eigen::Vector3d& p_nominal,
 // map is a strong contraction (factor L = lipschitz_bound(), about 1e-4).
 // Stops when the step is below 1e-12 mm, or, inside the bound box, when the
 // distance to the fixed point, at most L / (1 - L) times the step, is below
-// accuracy_mm.
+// accuracy_mm. The iteration is core/kinematics/fixed_point.h's.
 Eigen::Vector3d Corrector::iterate(const Eigen::Vector3d& p, const ApproachDirections& dir,
                                    Eigen::Vector3d x, double accuracy_mm) const {
   const double factor = step_factor_;
-  for (int k = 0; k < 21; ++k) {
-    const Eigen::Vector3d next = p - error_at(x, dir);
-    const double step = (next - x).norm();
-    const bool done =
-        step < 1e-12 || (factor * step < accuracy_mm && in_bound_box(x) && in_bound_box(next));
-    x = next;
-    if (done) break;
-  }
+  iterate_to_fixed_point(
+      x, FixedPointLimits{0, 21},
+      [&](const Eigen::Vector3d& previous) -> Eigen::Vector3d {
+        return p - error_at(previous, dir);
+      },
+      [&](const Eigen::Vector3d& previous, const Eigen::Vector3d& next) {
+        const double step = (next - previous).norm();
+        return step < 1e-12 ||
+               (factor * step < accuracy_mm && in_bound_box(previous) && in_bound_box(next));
+      });
   return x;
 }
 

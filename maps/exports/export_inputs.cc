@@ -1,0 +1,38 @@
+#include "maps/exports/export_inputs.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <stdexcept>
+
+#include "core/model/machine_json.h"
+
+namespace volmap::maps {
+
+std::vector<double> export_home(const std::string& machine_path, const VolumetricTable& table,
+                                const std::string& table_path) {
+  const Machine m = load_machine_json(machine_path);
+  if (m.axis_count() != table.axis_count())
+    throw std::invalid_argument(fmt::format("{}: machine {} has {} axes, the table {} has {}",
+                                            machine_path, m.name, m.axis_count(), table_path,
+                                            table.axis_count()));
+  std::vector<double> home;
+  for (int i = 0; i < m.axis_count(); ++i) home.push_back(m.home[i]);
+  return home;
+}
+
+std::optional<ErrorSet> export_errors(const VolumetricTable& table, const std::string& errors_path,
+                                      ErrorsFormat format) {
+  if (!errors_path.empty()) return load_errors(errors_path, format);
+  // The table names the errors file it was built from (as given to volmap
+  // map): formats that export the component errors themselves (isg-csv,
+  // HEIDENHAIN KinematicsComp) read it from there when no errors file is
+  // given, so `export --table T --format F -o DIR` works as cli.md writes
+  // it. A given errors file overrides.
+  if (!table.errors_source.empty() && table.errors_source != "-" &&
+      std::filesystem::is_regular_file(table.errors_source))
+    return load_errors(table.errors_source, ErrorsFormat::kAuto);
+  return std::nullopt;
+}
+
+}  // namespace volmap::maps
