@@ -8,19 +8,14 @@
 
 #include "core/common/html.h"
 #include "core/explain/explain.h"
+#include "core/explain/parameter_report.h"
 
 namespace volmap {
 namespace {
 
-double rounded(double v, int digits = 6) {
-  if (!std::isfinite(v) || v == 0) return v == 0 ? 0.0 : v;
-  return std::stod(fmt::format("{:.{}g}", v, digits));
-}
-nlohmann::json num(double v) {
-  if (!std::isfinite(v)) return nullptr;
-  return rounded(v);
-}
-nlohmann::json num(const std::optional<double>& v) { return v ? num(*v) : nlohmann::json(nullptr); }
+using explanation::json_number;
+using explanation::round_significant;
+
 nlohmann::json axis_json(const std::optional<AxisName>& a) {
   return a ? nlohmann::json(std::string(1, axis_char(*a))) : nlohmann::json(nullptr);
 }
@@ -109,14 +104,14 @@ nlohmann::ordered_json explain_json(const ExplainResult& r) {
   j["observations"] = r.observations;
   j["runs"] = r.runs;
   j["baseline"] = {{"description", r.baseline_description},
-                   {"rms_um", num(r.baseline_rms_um)},
-                   {"heldout_rms_um", num(r.baseline_heldout_rms_um)}};
+                   {"rms_um", json_number(r.baseline_rms_um)},
+                   {"heldout_rms_um", json_number(r.baseline_heldout_rms_um)}};
   nlohmann::ordered_json mm = nlohmann::ordered_json::array();
   for (const Mismatch& m : r.mismatch)
     mm.push_back({{"component", m.component},
                   {"regressor", m.regressor},
                   {"where", m.where},
-                  {"strength", num(rounded(m.strength, 3))}});
+                  {"strength", json_number(round_significant(m.strength, 3))}});
   j["mismatch"] = mm;
   nlohmann::ordered_json fs = nlohmann::ordered_json::array();
   for (const Finding& f : r.findings) {
@@ -131,20 +126,21 @@ nlohmann::ordered_json explain_json(const ExplainResult& r) {
     for (const auto& [k, v] : f.std_errors) {
       const std::size_t slash = k.find('/');
       if (slash == std::string::npos) {
-        se[k] = num(v);
+        se[k] = json_number(v);
       } else {
         nlohmann::ordered_json& arr = se[k.substr(0, slash)];
         if (!arr.is_array()) arr = nlohmann::ordered_json::array();
-        arr.push_back(nlohmann::ordered_json(num(v)));
+        arr.push_back(nlohmann::ordered_json(json_number(v)));
       }
     }
     o["parameters"] = p;
     o["std_errors"] = se;
-    o["rms_before_um"] = num(f.rms_before_um);
-    o["rms_after_um"] = num(f.rms_after_um);
-    o["heldout_rms_before_um"] = num(f.heldout_rms_before_um);
-    o["heldout_rms_after_um"] = num(f.heldout_rms_after_um);
-    o["evidence"] = {{"delta_bic", num(rounded(f.delta_bic, 5))}, {"regressor", f.plot.regressor}};
+    o["rms_before_um"] = json_number(f.rms_before_um);
+    o["rms_after_um"] = json_number(f.rms_after_um);
+    o["heldout_rms_before_um"] = json_number(f.heldout_rms_before_um);
+    o["heldout_rms_after_um"] = json_number(f.heldout_rms_after_um);
+    o["evidence"] = {{"delta_bic", json_number(round_significant(f.delta_bic, 5))},
+                     {"regressor", f.plot.regressor}};
     o["explanation"] = f.explanation;
     fs.push_back(o);
   }
@@ -156,7 +152,8 @@ nlohmann::ordered_json explain_json(const ExplainResult& r) {
                   {"explanation", c.explanation},
                   {"remedy", c.remedy}});
   j["confounded"] = cs;
-  j["final"] = {{"rms_um", num(r.final_rms_um)}, {"heldout_rms_um", num(r.final_heldout_rms_um)}};
+  j["final"] = {{"rms_um", json_number(r.final_rms_um)},
+                {"heldout_rms_um", json_number(r.final_heldout_rms_um)}};
   j["notes"] = r.notes;
   return j;
 }

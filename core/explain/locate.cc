@@ -1,17 +1,22 @@
 // Locate: where the baseline residuals have structure, against every
 // regressor the recording holds (docs/explain.md, "Locate").
+#include "core/explain/locate.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <numbers>
 #include <optional>
 
-#include "core/explain/explain_internal.h"
+#include "core/explain/axis_labels.h"
+#include "core/explain/distinct_values.h"
 
-namespace volmap::explain_detail {
+namespace volmap::explanation {
 namespace {
 
-constexpr const char* kGroupName[4] = {"ex", "ey", "ez", "e"};
+constexpr const char* kComponentName[kComponentKinds] = {"ex", "ey", "ez", "e"};
 
 struct Regressor {
   std::string name;
@@ -55,7 +60,7 @@ std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, d
   for (double f = f_lo; f <= f_hi; f += df, ++count) {
     double ss = 0, cc = 0, sc = 0, sr = 0, cr = 0;
     for (std::size_t i = 0; i < xs.size(); ++i) {
-      const double ph = 2 * kPi * f * xs[i], sn = std::sin(ph), cs = std::cos(ph);
+      const double ph = 2 * std::numbers::pi * f * xs[i], sn = std::sin(ph), cs = std::cos(ph);
       const double r = sum[i] - cnt[i] * m_all;
       ss += cnt[i] * sn * sn;
       cc += cnt[i] * cs * cs;
@@ -82,26 +87,27 @@ std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, d
                   std::min(1.0, strength)};
 }
 
-std::vector<Mismatch> locate(const Data& d, const Eigen::VectorXd& r_um,
+std::vector<Mismatch> locate(const Observations& obs, const Eigen::VectorXd& residual_um,
                              const std::vector<Regressor>& regs) {
   std::vector<Mismatch> out;
-  for (int g = 0; g < 4; ++g) {
-    if (!d.has_groups[g]) continue;
+  for (int g = 0; g < kComponentKinds; ++g) {
+    if (!obs.has_component[g]) continue;
     std::vector<int> eq;
-    for (std::size_t e = 0; e < d.n; ++e)
-      if (d.group[e] == g) eq.push_back(static_cast<int>(e));
+    for (std::size_t e = 0; e < obs.count; ++e)
+      if (obs.component[e] == g) eq.push_back(static_cast<int>(e));
     if (eq.size() < 12) continue;
     double mean = 0;
-    for (int e : eq) mean += r_um[e];
+    for (int e : eq) mean += residual_um[e];
     mean /= static_cast<double>(eq.size());
     double sst = 0;
-    for (int e : eq) sst += (r_um[e] - mean) * (r_um[e] - mean);
+    for (int e : eq) sst += (residual_um[e] - mean) * (residual_um[e] - mean);
     if (sst <= 0) continue;
     for (const Regressor& reg : regs) {
       std::vector<std::pair<double, double>> xv;
       for (int e : eq) {
-        const double x = reg.value[static_cast<std::size_t>(d.row[static_cast<std::size_t>(e)])];
-        if (std::isfinite(x)) xv.push_back({x, r_um[e]});
+        const double x =
+            reg.value[static_cast<std::size_t>(obs.recording_row[static_cast<std::size_t>(e)])];
+        if (std::isfinite(x)) xv.push_back({x, residual_um[e]});
       }
       if (xv.size() < 12) continue;
       std::sort(xv.begin(), xv.end());
@@ -140,13 +146,13 @@ std::vector<Mismatch> locate(const Data& d, const Eigen::VectorXd& r_um,
       }
       if (sstot <= 0) continue;
       if (!reg.periodic_unit.empty())
-        if (std::optional<Mismatch> p = periodic_structure(xv, sstot, kGroupName[g], reg))
+        if (std::optional<Mismatch> p = periodic_structure(xv, sstot, kComponentName[g], reg))
           out.push_back(*p);
       const double nn = static_cast<double>(xv.size());
       const double adj = 1.0 - ((sstot - ssb) / (nn - static_cast<double>(k))) / (sstot / (nn - 1));
       if (adj < 0.05) continue;
       out.push_back(
-          {kGroupName[g], reg.name, reg.where(best_lo, best_hi, best), std::min(1.0, adj)});
+          {kComponentName[g], reg.name, reg.where(best_lo, best_hi, best), std::min(1.0, adj)});
     }
   }
   std::stable_sort(out.begin(), out.end(),
@@ -155,21 +161,22 @@ std::vector<Mismatch> locate(const Data& d, const Eigen::VectorXd& r_um,
   return out;
 }
 
-std::vector<Regressor> regressors(const Data& d) {
-  const Recordings& rec = d.rec;
+std::vector<Regressor> regressors(const Observations& obs) {
+  const Recordings& rec = obs.recordings;
   std::vector<Regressor> regs;
   const std::size_t rows = rec.size();
-  for (AxisName a : d.m.axis_order) {
+  for (AxisName a : obs.machine.axis_order) {
     if (!rec.has_axis(a)) continue;
     Regressor pos;
-    pos.name = position_name(a);
-    for (std::size_t i = 0; i < rows; ++i) pos.value.push_back(d.q_user(a, static_cast<int>(i)));
+    pos.name = position_column_name(a);
+    for (std::size_t i = 0; i < rows; ++i)
+      pos.value.push_back(obs.reported_position(a, static_cast<int>(i)));
     if (!varies(pos.value)) continue;
     const std::string unit = is_rotary(a) ? "deg" : "mm";
     pos.where = [a, unit](double lo, double hi, double m) {
       return fmt::format(
           "{} {:.4g}..{:.4g} {}: mean residual {:+.3g} um (the region that departs most)",
-          axis_str(a), lo, hi, unit, m);
+          axis_letter(a), lo, hi, unit, m);
     };
     if (!is_rotary(a)) pos.periodic_unit = "mm";
     regs.push_back(pos);
@@ -187,12 +194,12 @@ std::vector<Regressor> regressors(const Data& d) {
       if (!(plus && minus)) continue;
       dir.where = [a](double lo, double, double m) {
         return fmt::format("all {} sweeps: approached from {}{}, mean residual {:+.3g} um",
-                           axis_str(a), lo > 0 ? "+" : "-", axis_str(a), m);
+                           axis_letter(a), lo > 0 ? "+" : "-", axis_letter(a), m);
       };
       regs.push_back(dir);
     }
   }
-  if (d.runs >= 2) {
+  if (obs.run_count >= 2) {
     Regressor run;
     run.name = "run";
     run.categorical = true;
@@ -225,8 +232,8 @@ std::vector<Regressor> regressors(const Data& d) {
 
 }  // namespace
 
-std::vector<Mismatch> locate_mismatch(const Data& d, const Eigen::VectorXd& r_um) {
-  return locate(d, r_um, regressors(d));
+std::vector<Mismatch> locate_mismatch(const Observations& obs, const Eigen::VectorXd& residual_um) {
+  return locate(obs, residual_um, regressors(obs));
 }
 
-}  // namespace volmap::explain_detail
+}  // namespace volmap::explanation

@@ -1,0 +1,135 @@
+// The findings from the final model (findings.h).
+#include "core/explain/findings.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/explain/confounding.h"
+
+namespace volmap::explanation {
+namespace {
+
+/// Coefficients (physical units) and their covariance of one selected block.
+struct BlockEstimate {
+  Eigen::VectorXd beta;
+  Eigen::MatrixXd cov;
+};
+
+BlockEstimate block_estimate(const LinearModel& model, const Eigen::MatrixXd& Ginv, double sigma2,
+                             const SelectedEffect& s) {
+  const Eigen::Index kc = s.fitted.block.cols.cols();
+  Eigen::VectorXd beta(kc);
+  Eigen::MatrixXd cov(kc, kc);
+  for (Eigen::Index a = 0; a < kc; ++a) {
+    beta[a] = model.beta[s.first_col + a] * model.scale[s.first_col + a];
+    for (Eigen::Index b = 0; b < kc; ++b)
+      cov(a, b) = sigma2 * Ginv(s.first_col + a, s.first_col + b) * model.scale[s.first_col + a] *
+                  model.scale[s.first_col + b];
+  }
+  return {beta, cov};
+}
+
+// Standard error of the nonlinear parameter from the curvature of the
+// profile RSS (other terms of the final model held).
+double nonlinear_standard_error(const Observations& obs, const LinearModel& model, double sigma2,
+                                const SelectedEffect& s) {
+  const Candidate& c = *s.fitted.cand;
+  double theta_se = std::nan("");
+  if (!c.refine) return theta_se;
+  const Eigen::Index kc = s.fitted.block.cols.cols();
+  LinearModel rest = without_block(model, s.first_col, kc, c.nonlinear);
+  fit(obs, rest);
+  const double th = s.fitted.theta, h = th * 1e-3;
+  auto rss_at = [&](double x) {
+    return profile(obs, rest, make_column_block(obs, c.build(x), c.per_run)).rss;
+  };
+  const double f0 = rss_at(th), fp = rss_at(th + h), fm = rss_at(th - h);
+  const double curv = (fp - 2 * f0 + fm) / (h * h);
+  if (curv > 0) theta_se = std::sqrt(2 * sigma2 / curv);
+  return theta_se;
+}
+
+// Plot: partial residual (final residual + this term) before, final residual after.
+ExplainPlot partial_residual_plot(const Observations& obs, const LinearModel& model,
+                                  const SelectedEffect& s) {
+  const Candidate& c = *s.fitted.cand;
+  const Eigen::Index kc = s.fitted.block.cols.cols();
+  ExplainPlot plot;
+  plot.regressor = c.plot_label;
+  const Eigen::VectorXd contrib =
+      model.X.middleCols(s.first_col, kc) * model.beta.segment(s.first_col, kc);
+  const std::size_t stride = std::max<std::size_t>(1, obs.count / 1500);
+  for (std::size_t e = 0; e < obs.count; e += stride) {
+    const Eigen::Index ei = static_cast<Eigen::Index>(e);
+    if (obs.sqrt_weight[ei] <= 0) continue;
+    plot.x.push_back(c.plot_x(obs.recording_row[e]));
+    plot.after_um.push_back(model.r[ei] / obs.sqrt_weight[ei]);
+    plot.before_um.push_back((model.r[ei] + contrib[ei]) / obs.sqrt_weight[ei]);
+    if (c.plot_group) plot.group.push_back(c.plot_group(obs.recording_row[e]));
+  }
+  return plot;
+}
+
+Finding finding_of(const Observations& obs, const LinearModel& model, const Eigen::MatrixXd& Ginv,
+                   double sigma2, const SelectedEffect& s) {
+  const Candidate& c = *s.fitted.cand;
+  const BlockEstimate est = block_estimate(model, Ginv, sigma2, s);
+  const double theta_se = nonlinear_standard_error(obs, model, sigma2, s);
+  Finding f;
+  f.effect = c.effect;
+  f.axis = c.axis;
+  c.report(est.beta, est.cov, s.fitted.theta, theta_se, f);
+  f.rms_before_um = s.rms_before_um;
+  f.rms_after_um = s.rms_after_um;
+  f.heldout_rms_before_um = s.heldout_before_um;
+  f.heldout_rms_after_um = s.heldout_after_um;
+  f.delta_bic = s.delta_bic;
+  f.plot = partial_residual_plot(obs, model, s);
+  return f;
+}
+
+// Per-run offsets that change monotonically in run order without a time
+// column: confounded, not guessed. The pair is reported, not a finding; the
+// per-run offsets stay in the final model (they are real).
+void report_shift_or_drift(Finding& f, ExplainResult& res) {
+  const nlohmann::json& per = f.parameters.front().second;
+  f.explanation +=
+      " The offsets change monotonically in run order and the recording has no time column: "
+      "a "
+      "slow drift between runs would look the same.";
+  res.confounded.push_back(shift_or_drift_between_runs(f.axis));
+  double largest_um = 0;
+  for (const auto& v : per) largest_um = std::max(largest_um, std::abs(v.get<double>()));
+  res.notes.push_back(
+      fmt::format("per-run offsets of {} are in the final model (largest {:.3g} um); set-up "
+                  "shift or drift, see "
+                  "confounded",
+                  f.axis ? axis_letter(*f.axis) : std::string("-"), largest_um));
+}
+
+}  // namespace
+
+void report_findings(const CandidateContext& ctx, const Selection& sel, ExplainResult& res) {
+  const Observations& obs = ctx.obs;
+  const LinearModel& model = sel.model;
+  // Parameters from the final model; covariance sigma^2 (X^T X)^-1.
+  const double sigma2 =
+      model.rss / std::max(1.0, static_cast<double>(obs.count) - static_cast<double>(model.k()));
+  Eigen::MatrixXd G = model.X.transpose() * model.X;
+  G.diagonal().array() += ridge_of(obs);
+  const Eigen::MatrixXd Ginv = G.ldlt().solve(Eigen::MatrixXd::Identity(G.rows(), G.cols()));
+  for (const SelectedEffect& s : sel.chosen) {
+    if (s.confounded) continue;
+    Finding f = finding_of(obs, model, Ginv, sigma2, s);
+    if (f.effect == "setup_shift" && !ctx.has_time && obs.run_count >= 3 &&
+        monotonic_in_run_order(f.parameters.front().second)) {
+      report_shift_or_drift(f, res);
+      continue;
+    }
+    res.findings.push_back(std::move(f));
+  }
+}
+
+}  // namespace volmap::explanation

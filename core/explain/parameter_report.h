@@ -1,0 +1,25 @@
+// How explain reports fitted numbers: rounded to 6 significant digits in
+// JSON (null when not finite), standard errors by the delta method, a
+// (sin, cos) pair as amplitude and phase.
+#pragma once
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+namespace volmap::explanation {
+
+/// v rounded to `digits` significant digits (0 and non-finite values unchanged).
+double round_significant(double v, int digits = 6);
+/// v rounded to 6 significant digits; null when not finite.
+nlohmann::json json_number(double v);
+/// The same for an optional value; null when absent.
+nlohmann::json json_number(const std::optional<double>& v);
+/// sqrt(g^T cov g) for a function with gradient g.
+double delta_se(const Eigen::VectorXd& g, const Eigen::MatrixXd& cov);
+/// Amplitude hypot(a, b) of beta[i_sin] sin + beta[i_cos] cos, its standard
+/// error and the phase atan2(b, a) in degrees.
+void amplitude_phase(const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov, int i_sin, int i_cos,
+                     double& amp, double& amp_se, double& phase_deg);
+
+}  // namespace volmap::explanation

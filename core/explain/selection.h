@@ -1,0 +1,46 @@
+// Selection (docs/explain.md): forward, one effect per step; a step must
+// lower BIC by more than 10 and, when the recording has two runs or more,
+// lower the leave-one-run-out RMS by more than 5 %. Candidates whose columns
+// the current model already spans are not estimable here; candidates that
+// explain the same structure as the best one (fitted values correlated
+// > 0.98, a BIC within the selection margin) are reported as confounded,
+// not as a finding. Then a backward check: every finding must still hold up
+// in the final model by the same two tests.
+#pragma once
+
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/explain/candidate.h"
+#include "core/explain/candidate_fit.h"
+#include "core/explain/linear_model.h"
+
+namespace volmap::explanation {
+
+/// An effect the selection took, with its evidence at the step it entered.
+struct SelectedEffect {
+  FittedCandidate fitted;
+  bool confounded = false;  ///< another effect explains the same structure
+  double rms_before_um = 0, rms_after_um = 0;
+  std::optional<double> heldout_before_um, heldout_after_um;
+  double delta_bic = 0;
+  Eigen::Index first_col = 0;  ///< its columns in the final model
+};
+
+struct Selection {
+  LinearModel model;  ///< the final model, fitted
+  std::optional<double> heldout_rms_um;
+  std::vector<SelectedEffect> chosen;
+  std::set<std::string> not_estimable;  ///< "effect AXIS (variant)"
+};
+
+/// Runs the forward selection from the fitted baseline, then the backward
+/// check. Appends the confounded pairs it finds to `confounded`.
+Selection select_effects(const CandidateContext& ctx, const std::vector<Candidate>& cands,
+                         LinearModel baseline, std::optional<double> baseline_heldout_rms_um,
+                         const std::set<std::string>& design_blocked,
+                         std::vector<Confounded>& confounded);
+
+}  // namespace volmap::explanation
