@@ -118,6 +118,149 @@ GeneralNumber read_number_general(std::string_view text, int line, const std::st
   return g;
 }
 
+// The number of a word in the form CAM writes: [sign] digits [. digits]
+// right after the letter, not continued after spaces by a digit or a point.
+struct FastNumber {
+  std::uint64_t mantissa = 0;  ///< wraps harmlessly past 19 digits: then `digits` says so
+  int decimals = 0;
+  bool negative = false;
+  size_t digits = 0;
+  size_t end = 0;     ///< after its last character
+  size_t next = 0;    ///< where the line goes on: past the spaces after the number
+  bool fast = false;  ///< false: the general path must read it
+};
+
+// `t` is zero-terminated (the zero is not a digit, a sign, a point or a
+// space), `i` just after the letter.
+FastNumber read_number_fast(const char* t, size_t i) {
+  FastNumber f;
+  size_t k = i;
+  if (t[k] == '-' || t[k] == '+') f.negative = t[k++] == '-';
+  const size_t int_begin = k;
+  auto read_digits = [&] {
+    unsigned d;
+    while ((d = static_cast<unsigned char>(t[k]) - '0') <= 9) {
+      f.mantissa = f.mantissa * 10 + d;
+      ++k;
+    }
+  };
+  read_digits();
+  f.digits = k - int_begin;
+  if (t[k] == '.') {
+    const size_t frac_begin = ++k;
+    read_digits();
+    f.decimals = static_cast<int>(k - frac_begin);
+    f.digits += k - frac_begin;
+  }
+  f.fast = f.digits > 0;
+  f.end = f.next = k;
+  if (f.fast && kChars.cls[static_cast<unsigned char>(t[k])] == kSpace) {
+    ++f.next;
+    while (kChars.cls[static_cast<unsigned char>(t[f.next])] == kSpace) ++f.next;
+    // Spaces inside a number join its parts (RS274NGC): the general path.
+    if (kChars.cls[static_cast<unsigned char>(t[f.next])] == kDigit || t[f.next] == '.')
+      f.fast = false;
+  }
+  return f;
+}
+
+// A character at `i` that does not begin a word: the ( ) comment it opens
+// (kept in b.comment when it is the first) and the index after it, or npos
+// for ';' (a comment to the end of the line); anything else is refused.
+size_t skip_comment(std::string_view text, int line, const std::string& file, size_t i, Block& b) {
+  const char c = text[i];
+  if (c == ';') return std::string_view::npos;
+  if (c == '(') {
+    const size_t close = text.find(')', i + 1);
+    if (close == std::string_view::npos) fail(file, line, i, "comment '(' is not closed; add ')'");
+    if (text.substr(i + 1, close - i - 1).find('(') != std::string_view::npos)
+      fail(file, line, i, "nested comment; RS274NGC comments do not nest");
+    if (b.comment.empty()) b.comment = std::string(text.substr(i + 1, close - i - 1));
+    return close + 1;
+  }
+  if (c == '#') fail(file, line, i, kNoParameters);
+  if (c == '[') fail(file, line, i, kNoExpressions);
+  if (c == 'O' || c == 'o')
+    fail(file, line, i,
+         "O-word control flow (subroutines, loops, conditionals) is not supported; "
+         "expand it in CAM to a flat program");
+  fail(file, line, i, std::string("unexpected character '") + c + "'; not a G-code word");
+}
+
+// The value of a number of `mantissa` over 10^decimals (`exact`: at most 15
+// significant digits), or std::from_chars' reading of its characters.
+double number_value(std::uint64_t mantissa, int decimals, bool negative, bool exact,
+                    std::string_view number, int line, const std::string& file, const Word& w) {
+  if (exact && decimals <= 22) {
+    // Exact: an integer below 2^53 over an exact power of ten, one
+    // correctly rounded division (Clinger), as std::from_chars gives.
+    // (Below 2^63: the signed conversion, one instruction.)
+    const double r = static_cast<double>(static_cast<std::int64_t>(mantissa)) / kPow10[decimals];
+    return negative ? -r : r;
+  }
+  // More digits: std::from_chars decides.
+  double v = 0;
+  const char* first = number.data() + (number[0] == '+' ? 1 : 0);
+  const auto res = std::from_chars(first, number.data() + number.size(), v);
+  if (res.ec != std::errc() || res.ptr != number.data() + number.size() || !std::isfinite(v))
+    fail(file, line, w.begin, std::string("bad number in word '") + w.letter + "'");
+  return v;
+}
+
+// Word::code10 of a G or M word of value `v`.
+int scaled_code(double v, int decimals) {
+  const double scaled = v * 10.0;
+  const double r = std::round(scaled);
+  // Codes beyond G/M 99999 do not exist; a longer number stays -1 (an
+  // unknown code, refused by the interpreter) instead of overflowing int.
+  if (std::abs(scaled - r) < 1e-6 && decimals <= 1 && v >= 0 && r < 1e6) return static_cast<int>(r);
+  return -1;
+}
+
+// Lexes the word whose letter is at `i` into a new word of `b`; returns
+// where the line goes on.
+size_t lex_word(std::string_view text, int line, const std::string& file, size_t i, char letter,
+                Block& b, std::string& spaced) {
+  const char* const t = b.text.c_str();
+  Word& w = b.words.emplace_back();  // (on InputError the block is as far as it got)
+  w.letter = letter;
+  w.begin = static_cast<std::uint32_t>(i);
+  ++i;
+  // Fast path, the form CAM writes. Anything else (spaces inside the
+  // number, no digits, # or [ after the letter, ...) takes the general
+  // path, which reads every form.
+  const FastNumber f = read_number_fast(t, i);
+  std::uint64_t mantissa = f.mantissa;
+  int decimals = f.decimals;
+  bool negative = f.negative;
+  // mantissa < 10^15: at most 15 significant digits, exact in a double
+  // (at most 15 digits say so at once).
+  bool exact = f.digits <= 15 || (f.digits <= 19 && mantissa < 1000000000000000ull);
+  std::string_view number;  // needed only when std::from_chars reads it
+  size_t end;               // of the word
+  if (f.fast) {
+    number = std::string_view(t + i, f.end - i);
+    end = f.end;
+    i = f.next;  // (the spaces are not looked at again)
+  } else {
+    const GeneralNumber g = read_number_general(text, line, file, i, spaced);
+    end = i = g.end;
+    number = g.number;
+    mantissa = g.mantissa;
+    decimals = g.decimals;
+    negative = g.negative;
+    exact = g.significant <= 15;
+    if (number.empty() || number == "+" || number == "-" || number == "." || number == "+." ||
+        number == "-.")
+      fail(file, line, w.begin, std::string("word '") + letter + "' has no number");
+  }
+  w.value = number_value(mantissa, decimals, negative, exact, number, line, file, w);
+  w.decimals = decimals;
+  w.end = static_cast<std::uint32_t>(end);
+  if (letter == 'G' || letter == 'M') w.code10 = scaled_code(w.value, decimals);
+  return i;
+}
+
 }  // namespace
 
 Block lex_block(std::string_view text, int line, const std::string& file) {
@@ -162,112 +305,14 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
   for (;;) {
     skip_space();
     if (i >= n) break;
-    const auto c = static_cast<unsigned char>(t[i]);
-    const char letter = kChars.upper[c];  // 0: not a word letter, or O
+    const char letter =
+        kChars.upper[static_cast<unsigned char>(t[i])];  // 0: not a word letter, or O
     if (letter == 0) {
-      if (c == ';') break;  // comment to end of line
-      if (c == '(') {
-        const size_t close = text.find(')', i + 1);
-        if (close == std::string_view::npos)
-          fail(file, line, i, "comment '(' is not closed; add ')'");
-        if (text.substr(i + 1, close - i - 1).find('(') != std::string_view::npos)
-          fail(file, line, i, "nested comment; RS274NGC comments do not nest");
-        if (b.comment.empty()) b.comment = std::string(text.substr(i + 1, close - i - 1));
-        i = close + 1;
-        continue;
-      }
-      if (c == '#') fail(file, line, i, kNoParameters);
-      if (c == '[') fail(file, line, i, kNoExpressions);
-      if (c == 'O' || c == 'o')
-        fail(file, line, i,
-             "O-word control flow (subroutines, loops, conditionals) is not supported; "
-             "expand it in CAM to a flat program");
-      fail(file, line, i,
-           std::string("unexpected character '") + static_cast<char>(c) + "'; not a G-code word");
+      i = skip_comment(text, line, file, i, b);
+      if (i == std::string_view::npos) break;
+      continue;
     }
-    Word& w = b.words.emplace_back();  // (on InputError the block is as far as it got)
-    w.letter = letter;
-    w.begin = static_cast<std::uint32_t>(i);
-    ++i;
-    // Fast path, the form CAM writes: [sign] digits [. digits] right after
-    // the letter and not continued after spaces by a digit or a point.
-    // Anything else (spaces inside the number, no digits, # or [ after the
-    // letter, ...) takes the general path below, which reads every form.
-    std::uint64_t mantissa = 0;
-    int decimals = 0;
-    bool negative = false;
-    size_t k = i;
-    if (t[k] == '-' || t[k] == '+') negative = t[k++] == '-';
-    const size_t int_begin = k;
-    // (The mantissa wraps harmlessly past 19 digits: then `digits` says so.)
-    auto read_digits = [&] {
-      unsigned d;
-      while ((d = static_cast<unsigned char>(t[k]) - '0') <= 9) {
-        mantissa = mantissa * 10 + d;
-        ++k;
-      }
-    };
-    read_digits();
-    size_t digits = k - int_begin;
-    if (t[k] == '.') {
-      const size_t frac_begin = ++k;
-      read_digits();
-      decimals = static_cast<int>(k - frac_begin);
-      digits += k - frac_begin;
-    }
-    bool fast = digits > 0;
-    size_t next = k;  // where the line goes on: past the spaces after the number
-    if (fast && kChars.cls[static_cast<unsigned char>(t[k])] == kSpace) {
-      ++next;
-      while (kChars.cls[static_cast<unsigned char>(t[next])] == kSpace) ++next;
-      // Spaces inside a number join its parts (RS274NGC): the general path.
-      if (kChars.cls[static_cast<unsigned char>(t[next])] == kDigit || t[next] == '.') fast = false;
-    }
-    // mantissa < 10^15: at most 15 significant digits, exact in a double
-    // (at most 15 digits say so at once).
-    bool exact = digits <= 15 || (digits <= 19 && mantissa < 1000000000000000ull);
-    std::string_view number;  // needed only when std::from_chars reads it
-    size_t end;               // of the word
-    if (fast) {
-      number = std::string_view(t + i, k - i);
-      end = k;
-      i = next;  // (the spaces are not looked at again)
-    } else {
-      const GeneralNumber g = read_number_general(text, line, file, i, spaced);
-      end = i = g.end;
-      number = g.number;
-      mantissa = g.mantissa;
-      decimals = g.decimals;
-      negative = g.negative;
-      exact = g.significant <= 15;
-      if (number.empty() || number == "+" || number == "-" || number == "." || number == "+." ||
-          number == "-.")
-        fail(file, line, w.begin, std::string("word '") + letter + "' has no number");
-    }
-    double v = 0;
-    if (exact && decimals <= 22) {
-      // Exact: an integer below 2^53 over an exact power of ten, one
-      // correctly rounded division (Clinger), as std::from_chars gives.
-      // (Below 2^63: the signed conversion, one instruction.)
-      const double r = static_cast<double>(static_cast<std::int64_t>(mantissa)) / kPow10[decimals];
-      v = negative ? -r : r;
-    } else {  // more digits: std::from_chars decides
-      const char* first = number.data() + (number[0] == '+' ? 1 : 0);
-      const auto res = std::from_chars(first, number.data() + number.size(), v);
-      if (res.ec != std::errc() || res.ptr != number.data() + number.size() || !std::isfinite(v))
-        fail(file, line, w.begin, std::string("bad number in word '") + letter + "'");
-    }
-    w.value = v;
-    w.decimals = decimals;
-    w.end = static_cast<std::uint32_t>(end);
-    if (letter == 'G' || letter == 'M') {
-      const double scaled = v * 10.0;
-      const double r = std::round(scaled);
-      // Codes beyond G/M 99999 do not exist; a longer number stays -1 (an
-      // unknown code, refused by the interpreter) instead of overflowing int.
-      if (std::abs(scaled - r) < 1e-6 && decimals <= 1 && v >= 0 && r < 1e6)
-        w.code10 = static_cast<int>(r);
-    }
+    i = lex_word(text, line, file, i, letter, b, spaced);
   }
 }
 

@@ -3,7 +3,10 @@
 // (1) every word known, (2) at most one G code per modal group and one M code
 // per group (bitmask), (3) the values make sense for the active state, (4)
 // only then the state changes and motions are produced. A block that fails
-// any step raises InputError naming file:line and what to do.
+// any step raises InputError naming file:line and what to do, and leaves
+// the state as it was: check() computes the state a block leads to without
+// touching the interpreter's, execute() takes it on only when the block
+// passed (tests/gcode/validate_before_mutate_test.cc).
 //
 // Supported: G0 G1 G2 G3 (centre I J K and R forms, full circles, helices,
 // P turns), G17 G18 G19, G20 G21, G90 G91, G90.1 G91.1, G53, G54-G59.3,
@@ -21,34 +24,15 @@
 
 #include <Eigen/Core>
 #include <array>
-#include <map>
-#include <optional>
 #include <string>
 #include <vector>
 
+#include "gcode/g_codes.h"
+#include "gcode/linuxcnc_files.h"  // (read_var_file and read_tool_table were declared here)
 #include "gcode/nc_block.h"
+#include "gcode/program_setup.h"
 
 namespace volmap::nc {
-
-struct ProgramSetup {
-  /// G54 .. G59.3 (index 0 .. 8): machine position of each program origin, mm.
-  /// Zero unless given (LinuxCNC's default; Eigen's default constructor
-  /// leaves a vector uninitialised, so `{}` alone would not zero them).
-  std::array<Eigen::Vector3d, 9> work_offset_mm = [] {
-    std::array<Eigen::Vector3d, 9> zero;
-    zero.fill(Eigen::Vector3d::Zero());
-    return zero;
-  }();
-  /// Tool table: tool (pocket) number -> tool length offset, mm (a LinuxCNC
-  /// .tbl Z: how much longer the tool is than the one whose offset is zero,
-  /// the machine file's tool).
-  std::map<int, double> tool_length_mm;
-  /// Where the tool stands when the program starts (machine coordinates, mm),
-  /// when known: lets a program that never commands an axis (a 2D plasma
-  /// program without Z) be corrected. Unknown by default: then the first
-  /// feed move must come after a rapid that sets X, Y and Z.
-  std::optional<Eigen::Vector3d> initial_position_mm;
-};
 
 enum class MotionKind { kRapid, kLinear, kArc, kCycle };
 
@@ -75,7 +59,7 @@ struct State {
   bool absolute = true;       ///< G90
   bool arc_absolute = false;  ///< G90.1
   int plane = 0;              ///< 0 XY, 1 ZX, 2 YZ
-  int motion = 0;             ///< G code x 10 of the modal motion (0, 10, 20, 30, 800+)
+  int motion = kG0Rapid;      ///< G code x 10 of the modal motion (G0 G1 G2 G3 G73 G80-G89)
   int coord_system = 0;       ///< 0 = G54 .. 8 = G59.3
   bool tool_length_active = false;
   /// The active tool length offset (G43 H, G43.1), mm; 0 under G49 (and
@@ -100,7 +84,7 @@ struct State {
   bool cycle_il_known = false;
   double cycle_il_mm = 0.0;
   double feed = 0.0;
-  int feed_mode = 940;                                    ///< 930, 940, 950
+  int feed_mode = kG94UnitsPerMinute;                     ///< G93, G94, G95 (x10)
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  ///< machine coordinates
   bool position_known = false;  ///< false until every axis has been commanded
   std::array<bool, 3> axis_known{};
@@ -108,6 +92,8 @@ struct State {
   /// Spindle turning (M3 or M4 in effect; M5, M19 and the program's end
   /// stop it): LinuxCNC's G86 needs it ("Spindle not turning in g86").
   bool spindle_turning = false;
+
+  friend bool operator==(const State&, const State&) = default;
 };
 
 /// What one block did, for the post-processor: its motion (at most one), and
@@ -128,8 +114,13 @@ class Interpreter {
  public:
   Interpreter(ProgramSetup setup, std::string file);
 
-  /// Interprets one block. Throws InputError on anything refused.
+  /// Interprets one block: check() then the state it computed. Throws
+  /// InputError on anything refused, the state unchanged.
   void execute(const Block& b, BlockEffect& effect);
+  /// Validates one block against the state (every step) and computes what
+  /// it does: returns the state after it and sets `effect`. Changes nothing
+  /// of the interpreter. Throws InputError on anything refused.
+  State check(const Block& b, BlockEffect& effect) const;
   /// A block of axis words only (X Y Z, `value` in program units by axis,
   /// bit a of `given` for each word; the block nc::lex_plain_axis_words
   /// reads) when it needs none of execute()'s checks: G1 in effect, a feed
@@ -148,21 +139,9 @@ class Interpreter {
   }
 
  private:
-  [[noreturn]] void fail(const Block& b, const Word* w, const std::string& msg) const;
-  /// The straight move (G0 or G1) of a block of axis words: the end point,
-  /// `motion`'s kind, ends and feed, the position and the axes known.
-  void straight_move(const double (&value)[3], unsigned given, Motion& motion);
   ProgramSetup setup_;
   std::string file_;
   State s_;
 };
-
-/// Reads a LinuxCNC parameter (.var) file's work offsets (parameters
-/// 5221-5223 for G54, 20 apart up to G59.3). Throws InputError.
-void read_var_file(const std::string& path, ProgramSetup& setup);
-/// Reads a LinuxCNC tool table (.tbl): "T1 P1 Z12.5 ... ;comment". Z is the
-/// tool length offset in mm, as LinuxCNC applies it: relative to the tool of
-/// offset zero, which volmap takes to be the machine file's tool.
-void read_tool_table(const std::string& path, ProgramSetup& setup);
 
 }  // namespace volmap::nc

@@ -1,0 +1,83 @@
+// Step 3 of the interpreter's validation (nc_interpreter.h) for one block:
+// the values checked against the state, in RS274NGC order, and the state
+// the block leads to computed into a copy. Internal to the interpreter.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+
+#include "gcode/block_words.h"
+#include "gcode/nc_interpreter.h"
+
+namespace volmap::nc {
+
+/// The straight move (G0 or G1) of a block of axis words (program units by
+/// axis, bit a of `given` for each word) from state `s` with `work_offset_mm`
+/// active: the end point, `motion`'s kind, ends and feed; `s`'s position
+/// and the axes known.
+void straight_move(const Eigen::Vector3d& work_offset_mm, const double (&value)[3], unsigned given,
+                   State& s, Motion& motion);
+
+class BlockCheck {
+ public:
+  /// `s` is the state before the block, and after run() the state after it.
+  BlockCheck(const ProgramSetup& setup, const std::string& file, const Block& b, BlockWords& words,
+             State& s, BlockEffect& effect);
+  void run();
+
+ private:
+  [[noreturn]] void fail(const Word* w, const std::string& msg) const {
+    refuse_block(file_, b_, w, msg);
+  }
+  const Word* word(char L) const { return words_.letter[static_cast<size_t>(L - 'A')]; }
+  /// Work offset of the coordinate system active in s_, mm.
+  const Eigen::Vector3d& work_offset() const {
+    return setup_.work_offset_mm[static_cast<size_t>(s_.coord_system)];
+  }
+
+  // block_check.cc
+  void check_polar_words() const;
+  /// The block of most programs (axis words and F in G0 or G1): true when
+  /// this was one and has been done.
+  bool common_block();
+  void general_steps();
+  void feed_tool_and_spindle();
+  void tool_length();
+  void distance_and_coordinate_modes();
+  /// Whether the block moves, and the refusals of words that need a motion.
+  bool motion_in_block(bool any_axis);
+  /// LinuxCNC's check_other_codes: a word no code of the block uses.
+  void unused_words(bool motion_here);
+
+  // block_motion.cc
+  void motion(int motion_before);
+  void polar_target(double at_x, double at_y, bool xy_known, Eigen::Vector3d& target,
+                    std::array<bool, 3>& given) const;
+  void arc(Motion& mo, const Eigen::Vector3d& target, const std::array<bool, 3>& given);
+
+  // canned_cycles.cc
+  /// The checks of a cycle block and its modal R Z Q; returns the repeats (L).
+  int cycle_words(int motion_before);
+  /// A canned cycle's holes into effect_ (motion and more_holes); returns
+  /// where the tool ends.
+  Eigen::Vector3d cycle(Motion& mo, int motion_before, double at_x, double at_y, bool xy_known,
+                        const Eigen::Vector3d& target);
+
+  const ProgramSetup& setup_;
+  const std::string& file_;
+  const Block& b_;
+  BlockWords& words_;
+  State& s_;
+  BlockEffect& effect_;
+  // The slots of words_, by their names in the steps.
+  const std::array<const Word*, kGroupCount>& g;
+  const std::array<const Word*, kMGroupCount>& m;
+  const Word* const polar_radius;
+  const Word* const polar_angle;
+  const bool polar;
+  bool consumed_axes_ = false;  ///< G43.1 took the Z word
+  bool g53_ = false;
+};
+
+}  // namespace volmap::nc
