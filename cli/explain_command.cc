@@ -7,7 +7,7 @@
 #include "cli/commands.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
-#include "core/explain/explain/explain/explain.h"
+#include "core/explain/explain.h"
 #include "core/measure/recordings.h"
 #include "core/model/errors_csv.h"
 #include "core/model/machine_json.h"

@@ -14,8 +14,8 @@
 
 #include "cli/commands.h"
 #include "cli/parse_util.h"
-#include "core/kinematics/kinematics/correction.h"
-#include "core/kinematics/kinematics/kinematics.h"
+#include "core/kinematics/correction.h"
+#include "core/kinematics/kinematics.h"
 #include "core/model/errors_csv.h"
 #include "core/model/machine_json.h"
 

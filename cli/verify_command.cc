@@ -15,8 +15,8 @@
 #include "core/model/errors_import.h"
 #include "core/model/machine_json.h"
 #include "postproc/five_axis/five_axis_verify.h"
-#include "postproc/verify/verify/verify/verify.h"
-#include "postproc/verify/verify/verify/verify_report.h"
+#include "postproc/verify/verify.h"
+#include "postproc/verify/verify_report.h"
 
 namespace volmap::cli {
 namespace {
