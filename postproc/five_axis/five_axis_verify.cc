@@ -116,10 +116,144 @@ class Verifier {
     return std::max({8, a, b});
   }
 
+  // The deviation of actual pose a from the nominal moves around *cursor:
+  // the distance to the nearest move of the window and the smallest axis
+  // angle among the moves about as near (within twice that plus 5 um: moves
+  // that meet or retrace each other) and the cursor's move and its
+  // neighbours. The cursor moves to the first move from the cursor on that
+  // is within 0.1 mm of the nearest: where a path crosses or retraces
+  // itself, an uncompensated sample tens of um off its own move can be
+  // nearer to a later one, which must not pull the cursor ahead. Returns
+  // (mm, rad).
+  std::pair<double, double> deviation_near_cursor(const std::vector<NominalMove>& moves,
+                                                  const ToolPose& a, size_t& cursor) const {
+    const size_t lo = cursor >= 2 ? cursor - 2 : 0, hi = std::min(moves.size(), cursor + kWindow);
+    double best = 1e300;
+    std::array<double, kWindow + 2> dist{};
+    for (size_t k = lo; k < hi; ++k) {
+      dist[k - lo] = nc::distance_to_path(moves[k].m.tip, a.tip_mm);
+      best = std::min(best, dist[k - lo]);
+    }
+    size_t best_k = hi;
+    for (size_t k = cursor; k < hi && best_k == hi; ++k)
+      if (dist[k - lo] <= best + 0.1) best_k = k;
+    if (best_k == hi) best_k = cursor;
+    double best_ang = 1e300;
+    for (size_t k = lo; k < hi; ++k) {
+      const bool near_cursor = k + 1 >= best_k && k <= best_k + 1;
+      if (near_cursor || dist[k - lo] <= 2 * best + 0.005)
+        best_ang = std::min(best_ang, min_angle(moves[k].m, a.axis));
+    }
+    cursor = best_k;
+    return {best, best_ang};
+  }
+
   const FiveAxisVerifyOptions& o_;
   FiveAxisTransform tf_;
   FiveAxisTransform nominal_tf_;
 };
+
+// Before: the nominal program under ideal TCP interpolation; its feed moves
+// into *moves.
+FiveAxisDeviation nominal_deviation(const Verifier& v, std::istream& nominal,
+                                    const std::string& nominal_name, const Machine& machine,
+                                    const FiveAxisVerifyOptions& options,
+                                    std::vector<NominalMove>& moves) {
+  const Machine& mach = v.tf_.machine();
+  FiveAxisReader reader(nominal, nominal_name, machine, options.form, options.initial);
+  Accumulator acc;
+  double path_mm = 0.0;  // tip travel of the feed moves so far
+  AxisVector prev = mach.home;
+  if (options.initial.q.size() == mach.axis_count())
+    for (int k = 0; k < mach.axis_count(); ++k)
+      if (is_rotary(mach.axis_order[static_cast<size_t>(k)])) prev[k] = options.initial.q[k];
+  FiveAxisLine l;
+  while (reader.next(l)) {
+    if (!l.has_move) continue;
+    const FiveAxisMove& m = l.move;
+    auto nominal_u = [&](double s) {
+      const Vector3d p = nc::point_on(m.tip, s);
+      if (m.by_angles) return v.nominal_tf_.axes_for_angles(m.q0 + s * (m.q1 - m.q0), p);
+      ToolPose pose{p, slerp_axis(m.a0, m.a1, s)};
+      return v.nominal_tf_.axes_for_pose(pose, prev);
+    };
+    try {
+      if (m.rapid) {
+        prev = nominal_u(1.0);
+        continue;
+      }
+      NominalMove n{m, l.line, nc::path_length_mm(m.tip)};
+      const double rot =
+          m.by_angles ? (m.q1 - m.q0).lpNorm<Eigen::Infinity>() : angle_between(m.a0, m.a1);
+      const int count = v.samples_for(n.length_mm, rot);
+      for (int i = 1; i <= count; ++i) {
+        const AxisVector u = nominal_u(static_cast<double>(i) / count);
+        prev = u;
+        const ToolPose a = v.tf_.actual(u);
+        const auto [d, ang] = v.deviation(n, a);
+        acc.add(path_mm + n.length_mm * i / count, d, ang, l.line);
+      }
+      path_mm += n.length_mm;
+      moves.push_back(n);
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InputError(nominal_name, l.line, e.what());
+    }
+  }
+  return acc.result();
+}
+
+// After: the compensated program's axes, interpolated linearly, against the
+// nominal feed moves.
+FiveAxisDeviation compensated_deviation(const Verifier& v, std::istream& compensated,
+                                        const std::string& compensated_name, const Machine& machine,
+                                        const std::vector<NominalMove>& moves) {
+  const Machine& mach = v.tf_.machine();
+  FiveAxisReader reader(compensated, compensated_name, machine, InputForm::kMachineAxes,
+                        InitialPose{});
+  Accumulator acc;
+  double path_mm = 0.0;
+  AxisVector u_prev = mach.home;
+  bool known = false;
+  size_t cursor = 0;
+  FiveAxisLine l;
+  while (reader.next(l)) {
+    if (!l.has_move) continue;
+    const FiveAxisMove& m = l.move;
+    AxisVector u1 = m.q1;
+    for (int k = 0, lin = 0; k < mach.axis_count(); ++k)
+      if (!is_rotary(mach.axis_order[static_cast<size_t>(k)])) u1[k] = m.tip.end_mm[lin++];
+    if (m.rapid || !known || moves.empty()) {
+      u_prev = u1;
+      known = true;
+      continue;
+    }
+    try {
+      const ToolPose p0 = v.tf_.actual(u_prev), p1 = v.tf_.actual(u1);
+      double rot = 0;
+      for (int k = 0; k < mach.axis_count(); ++k)
+        if (is_rotary(mach.axis_order[static_cast<size_t>(k)]))
+          rot = std::max(rot, std::abs(u1[k] - u_prev[k]));
+      const double chord_mm = (p1.tip_mm - p0.tip_mm).norm();
+      const int count = v.samples_for(chord_mm, rot);
+      for (int i = 1; i <= count; ++i) {
+        const AxisVector u = u_prev + (static_cast<double>(i) / count) * (u1 - u_prev);
+        const ToolPose a = v.tf_.actual(u);
+        // Nearest nominal feed move around the cursor.
+        const auto [best, best_ang] = v.deviation_near_cursor(moves, a, cursor);
+        acc.add(path_mm + chord_mm * i / count, best, best_ang, l.line);
+      }
+      path_mm += chord_mm;
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InputError(compensated_name, l.line, e.what());
+    }
+    u_prev = u1;
+  }
+  return acc.result();
+}
 
 }  // namespace
 
@@ -129,126 +263,10 @@ FiveAxisVerifyResult verify_five_axis(std::istream& nominal, const std::string& 
                                       const ErrorSet& errors,
                                       const FiveAxisVerifyOptions& options) {
   Verifier v(machine, errors, options);
-  const Machine& mach = v.tf_.machine();
   FiveAxisVerifyResult r;
   std::vector<NominalMove> moves;
-  // Before: the nominal program under ideal TCP interpolation.
-  {
-    FiveAxisReader reader(nominal, nominal_name, machine, options.form, options.initial);
-    Accumulator acc;
-    double path_mm = 0.0;  // tip travel of the feed moves so far
-    AxisVector prev = mach.home;
-    if (options.initial.q.size() == mach.axis_count())
-      for (int k = 0; k < mach.axis_count(); ++k)
-        if (is_rotary(mach.axis_order[static_cast<size_t>(k)])) prev[k] = options.initial.q[k];
-    FiveAxisLine l;
-    while (reader.next(l)) {
-      if (!l.has_move) continue;
-      const FiveAxisMove& m = l.move;
-      auto nominal_u = [&](double s) {
-        const Vector3d p = nc::point_on(m.tip, s);
-        if (m.by_angles) return v.nominal_tf_.axes_for_angles(m.q0 + s * (m.q1 - m.q0), p);
-        ToolPose pose{p, slerp_axis(m.a0, m.a1, s)};
-        return v.nominal_tf_.axes_for_pose(pose, prev);
-      };
-      try {
-        if (m.rapid) {
-          prev = nominal_u(1.0);
-          continue;
-        }
-        NominalMove n{m, l.line, nc::path_length_mm(m.tip)};
-        const double rot =
-            m.by_angles ? (m.q1 - m.q0).lpNorm<Eigen::Infinity>() : angle_between(m.a0, m.a1);
-        const int count = v.samples_for(n.length_mm, rot);
-        for (int i = 1; i <= count; ++i) {
-          const AxisVector u = nominal_u(static_cast<double>(i) / count);
-          prev = u;
-          const ToolPose a = v.tf_.actual(u);
-          const auto [d, ang] = v.deviation(n, a);
-          acc.add(path_mm + n.length_mm * i / count, d, ang, l.line);
-        }
-        path_mm += n.length_mm;
-        moves.push_back(n);
-      } catch (const InputError&) {
-        throw;
-      } catch (const std::exception& e) {
-        throw InputError(nominal_name, l.line, e.what());
-      }
-    }
-    r.before = acc.result();
-  }
-  // After: the compensated program's axes, interpolated linearly.
-  {
-    FiveAxisReader reader(compensated, compensated_name, machine, InputForm::kMachineAxes,
-                          InitialPose{});
-    Accumulator acc;
-    double path_mm = 0.0;
-    AxisVector u_prev = mach.home;
-    bool known = false;
-    size_t cursor = 0;
-    FiveAxisLine l;
-    while (reader.next(l)) {
-      if (!l.has_move) continue;
-      const FiveAxisMove& m = l.move;
-      AxisVector u1 = m.q1;
-      for (int k = 0, lin = 0; k < mach.axis_count(); ++k)
-        if (!is_rotary(mach.axis_order[static_cast<size_t>(k)])) u1[k] = m.tip.end_mm[lin++];
-      if (m.rapid || !known || moves.empty()) {
-        u_prev = u1;
-        known = true;
-        continue;
-      }
-      try {
-        const ToolPose p0 = v.tf_.actual(u_prev), p1 = v.tf_.actual(u1);
-        double rot = 0;
-        for (int k = 0; k < mach.axis_count(); ++k)
-          if (is_rotary(mach.axis_order[static_cast<size_t>(k)]))
-            rot = std::max(rot, std::abs(u1[k] - u_prev[k]));
-        const double chord_mm = (p1.tip_mm - p0.tip_mm).norm();
-        const int count = v.samples_for(chord_mm, rot);
-        for (int i = 1; i <= count; ++i) {
-          const AxisVector u = u_prev + (static_cast<double>(i) / count) * (u1 - u_prev);
-          const ToolPose a = v.tf_.actual(u);
-          // Nearest nominal feed move around the cursor.
-          // The deviation: the distance to the nearest move of the window
-          // and the smallest axis angle among the moves about as near (within
-          // twice that plus 5 um: moves that meet or retrace each other) and
-          // the cursor's move and its neighbours. The cursor moves
-          // to the first move from the cursor on that is within 0.1 mm of
-          // the nearest: where a path crosses or retraces itself, an
-          // uncompensated sample tens of um off its own move can be nearer
-          // to a later one, which must not pull the cursor ahead.
-          const size_t lo = cursor >= 2 ? cursor - 2 : 0,
-                       hi = std::min(moves.size(), cursor + kWindow);
-          double best = 1e300;
-          std::array<double, kWindow + 2> dist{};
-          for (size_t k = lo; k < hi; ++k) {
-            dist[k - lo] = nc::distance_to_path(moves[k].m.tip, a.tip_mm);
-            best = std::min(best, dist[k - lo]);
-          }
-          size_t best_k = hi;
-          for (size_t k = cursor; k < hi && best_k == hi; ++k)
-            if (dist[k - lo] <= best + 0.1) best_k = k;
-          if (best_k == hi) best_k = cursor;
-          double best_ang = 1e300;
-          for (size_t k = lo; k < hi; ++k) {
-            const bool near_cursor = k + 1 >= best_k && k <= best_k + 1;
-            if (near_cursor || dist[k - lo] <= 2 * best + 0.005)
-              best_ang = std::min(best_ang, v.min_angle(moves[k].m, a.axis));
-          }
-          cursor = best_k;
-          acc.add(path_mm + chord_mm * i / count, best, best_ang, l.line);
-        }
-        path_mm += chord_mm;
-      } catch (const InputError&) {
-        throw;
-      } catch (const std::exception& e) {
-        throw InputError(compensated_name, l.line, e.what());
-      }
-      u_prev = u1;
-    }
-    r.after = acc.result();
-  }
+  r.before = nominal_deviation(v, nominal, nominal_name, machine, options, moves);
+  r.after = compensated_deviation(v, compensated, compensated_name, machine, moves);
   return r;
 }
 

@@ -108,6 +108,71 @@ std::vector<nc::Motion> nominal_feeds(const std::string& program, const Machine&
   return out;
 }
 
+// The output commands machine axes: the input's TCP switches are gone.
+void expect_no_tcp_switches(const std::string& out) {
+  std::ifstream f(out);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  EXPECT_EQ(ss.str().find("M428"), std::string::npos);
+  EXPECT_EQ(ss.str().find("M429"), std::string::npos);
+}
+
+// C never jumps by 180 degrees or more between consecutive lines, rapids
+// included (the demos' own G0 C0 after C-399.8 is taken a whole turn
+// off: the same pose).
+void expect_c_never_jumps_half_a_turn(const std::string& out) {
+  std::ifstream f(out);
+  std::string line;
+  int n = 0, moves = 0;
+  double c_prev = 0;
+  bool have = false;
+  while (std::getline(f, line)) {
+    const nc::Block b = nc::lex_block(line, ++n, out);
+    if (const nc::Word* w = b.find('C')) {
+      if (have) {
+        EXPECT_LT(std::abs(w->value - c_prev), 180.0) << out << ":" << n << ": " << line;
+      }
+      c_prev = w->value;
+      have = true;
+      ++moves;
+    }
+  }
+  EXPECT_GT(moves, 100);
+}
+
+// The farthest of rs274's feed points, run on the real machine (model), from
+// the nominal path (mm); slack_mm: what rs274's printed decimals allow.
+double worst_tip_distance_mm(const std::vector<Pose5>& feeds, const std::vector<nc::Motion>& path,
+                             const ErrorModel& model, double slack_mm) {
+  size_t cursor = 0;
+  double worst = 0;
+  for (const Pose5& p : feeds) {
+    AxisVector u(5);
+    u << p.x, p.y, p.z, p.a * M_PI / 180, p.c * M_PI / 180;
+    const Eigen::Vector3d tip = model.actual(u).tip_mm;
+    // The first move from the cursor on that the point lies on (a path
+    // that comes back over itself has end points on several moves), else
+    // the nearest in the window.
+    double best = 1e300;
+    size_t best_k = cursor;
+    for (size_t k = cursor; k < std::min(path.size(), cursor + 12); ++k) {
+      const double d = nc::distance_to_path(path[k], tip);
+      if (d <= 1e-3 + slack_mm) {
+        best = d;
+        best_k = k;
+        break;
+      }
+      if (d < best) {
+        best = d;
+        best_k = k;
+      }
+    }
+    cursor = best_k;
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
 class RealFiveAxisProgram : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(RealFiveAxisProgram, PostedRs274AcceptsAndTheToolFollowsTheNominalPath) {
@@ -126,36 +191,11 @@ TEST_P(RealFiveAxisProgram, PostedRs274AcceptsAndTheToolFollowsTheNominalPath) {
   ASSERT_EQ(post.status, 0) << post.err;
 
   // Independent of rs274: the input's TCP switches are gone.
-  {
-    std::ifstream f(out);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    EXPECT_EQ(ss.str().find("M428"), std::string::npos);
-    EXPECT_EQ(ss.str().find("M429"), std::string::npos);
-  }
+  expect_no_tcp_switches(out);
 
   // C never jumps by 180 degrees or more between consecutive lines, rapids
-  // included (the demos' own G0 C0 after C-399.8 is taken a whole turn
-  // off: the same pose).
-  {
-    std::ifstream f(out);
-    std::string line;
-    int n = 0, moves = 0;
-    double c_prev = 0;
-    bool have = false;
-    while (std::getline(f, line)) {
-      const nc::Block b = nc::lex_block(line, ++n, out);
-      if (const nc::Word* w = b.find('C')) {
-        if (have) {
-          EXPECT_LT(std::abs(w->value - c_prev), 180.0) << out << ":" << n << ": " << line;
-        }
-        c_prev = w->value;
-        have = true;
-        ++moves;
-      }
-    }
-    EXPECT_GT(moves, 100);
-  }
+  // included.
+  expect_c_never_jumps_half_a_turn(out);
 
   // verify: before and after along the whole path.
   const test::CliResult v = test::run_volmap("verify --machine " + machine + " --errors " + errors +
@@ -203,32 +243,7 @@ TEST_P(RealFiveAxisProgram, PostedRs274AcceptsAndTheToolFollowsTheNominalPath) {
   // rs274 prints 4 decimals (mm and degrees): 0.5e-4 mm per linear axis,
   // 0.5e-4 deg per rotary axis times a lever below 300 mm.
   const double slack_mm = std::sqrt(3.0) * 0.5e-4 + 2 * 0.5e-4 * M_PI / 180 * 300;
-  size_t cursor = 0;
-  double worst = 0;
-  for (const Pose5& p : feeds) {
-    AxisVector u(5);
-    u << p.x, p.y, p.z, p.a * M_PI / 180, p.c * M_PI / 180;
-    const Eigen::Vector3d tip = model.actual(u).tip_mm;
-    // The first move from the cursor on that the point lies on (a path
-    // that comes back over itself has end points on several moves), else
-    // the nearest in the window.
-    double best = 1e300;
-    size_t best_k = cursor;
-    for (size_t k = cursor; k < std::min(path.size(), cursor + 12); ++k) {
-      const double d = nc::distance_to_path(path[k], tip);
-      if (d <= 1e-3 + slack_mm) {
-        best = d;
-        best_k = k;
-        break;
-      }
-      if (d < best) {
-        best = d;
-        best_k = k;
-      }
-    }
-    cursor = best_k;
-    worst = std::max(worst, best);
-  }
+  const double worst = worst_tip_distance_mm(feeds, path, model, slack_mm);
   std::printf("%s: %zu feed points read by rs274, worst tip distance to the nominal path %.3f um\n",
               GetParam(), feeds.size(), worst * 1e3);
   EXPECT_LT(worst, 1e-3 + slack_mm);

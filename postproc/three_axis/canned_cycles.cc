@@ -1,0 +1,223 @@
+// Canned cycles that are not one block for one hole: one block per hole
+// (repeats, G91, polar words), and --expand-cycles, which writes a cycle out
+// as LinuxCNC's moves (docs/post.md).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "core/common/input_error.h"
+#include "postproc/three_axis/program_post.h"
+
+namespace volmap::post {
+
+// A canned cycle that the controller would repeat (L > 1), that is
+// incremental (G91) or placed by polar words: one block per hole, each with
+// its own correction, the first in place of the block (its other words kept,
+// L and the polar words dropped), the others after it as modal repeats
+// (`X.. Y.. Z.. R..` and the block's P and Q). Under G91 every number is
+// taken from where the controller stands when it reads it: X Y from over
+// the hole before, R from that level (LinuxCNC: R above the level the tool
+// is at, Z below R), so the rounding of each number is carried into the
+// next instead of adding up.
+void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c,
+                              bool lower, bool spaces, int dec) {
+  const nc::State& s = interp_.state();
+  const double unit = s.unit_mm;
+  const Vector3d& wo = interp_.work_offset();
+  std::string extra;  // the block's P and Q words, for every repeat
+  for (const nc::Word& w : b.words)
+    if (w.letter == 'P' || w.letter == 'Q') {
+      if (spaces) extra += ' ';
+      extra += b.text.substr(w.begin, w.end - w.begin);
+    }
+  enter_cycle_run();
+  const size_t holes = 1 + fx.more_holes.size();
+  for (size_t k = 0; k < holes; ++k) {
+    const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[k - 1];
+    // The traverse over the hole sets X and Y's approach; the feed goes down.
+    ApproachDirections d;
+    const Vector3d cmd = position_command(c, h.start_mm, h.end_mm, true, d);
+    const Vector3d r_cmd = command(c, Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm), d);
+    double x, y, r, z;  // the words
+    Vector3d at;        // where the controller takes them to: over the hole, at R
+    if (s.absolute) {
+      x = written((cmd.x() - wo.x()) / unit, dec);
+      y = written((cmd.y() - wo.y()) / unit, dec);
+      r = written((r_cmd.z() - wo.z()) / unit, dec);
+      z = written((cmd.z() - wo.z()) / unit, dec);
+      at = Vector3d(x * unit + wo.x(), y * unit + wo.y(), r * unit + wo.z());
+    } else {
+      x = written((cmd.x() - emitted_mm_.x()) / unit, dec);
+      y = written((cmd.y() - emitted_mm_.y()) / unit, dec);
+      r = written((r_cmd.z() - ctrl_il_mm_) / unit, dec);
+      at = Vector3d(emitted_mm_.x() + x * unit, emitted_mm_.y() + y * unit, ctrl_il_mm_ + r * unit);
+      z = written((cmd.z() - at.z()) / unit, dec);
+    }
+    std::string words;
+    const char* letters = lower ? "xyzr" : "XYZR";
+    const double values[4] = {x, y, z, r};
+    for (int i = 0; i < 4; ++i) {
+      if (i > 0 && spaces) words += ' ';
+      words += letters[i];
+      words += nc::format_number(values[i], dec);
+    }
+    if (k == 0) {
+      nc::BlockEdit edit;
+      for (size_t i = 0; i < b.words.size(); ++i) {
+        const char L = b.words[i].letter;
+        if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == '@' || L == '^')
+          edit.remove.push_back(static_cast<int>(i));
+      }
+      edit.insert = words;
+      emit(nc::apply_edit(b, edit));
+      ++report_.lines_changed;
+    } else {
+      emit(words + extra);
+      ++report_.lines_added;
+    }
+    // After the hole: G99 at R, G98 at the initial level or R if higher.
+    emitted_mm_ = Vector3d(at.x(), at.y(), s.g98 ? std::max(ctrl_il_mm_, at.z()) : at.z());
+  }
+  emitted_known_ = true;
+}
+
+// Pecks of one hole that --expand-cycles writes out at most.
+constexpr int kMaxPecks = 10000;
+
+void ProgramPost::write_expanded_cycle_block(const nc::Block& b, int code) {
+  nc::BlockEdit edit;
+  for (size_t i = 0; i < b.words.size(); ++i) {
+    const nc::Word& w = b.words[i];
+    const char L = w.letter;
+    if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == 'P' || L == 'Q' ||
+        L == '@' || L == '^' || (L == 'G' && w.code10 == code))
+      edit.remove.push_back(static_cast<int>(i));
+  }
+  const std::string rest = nc::apply_edit(b, edit);
+  bool blank = true;
+  for (char ch : rest) blank = blank && (ch == ' ' || ch == '\t');
+  if (!blank) emit(rest);
+  ++report_.lines_changed;
+}
+
+// --expand-cycles: a cycle block (every hole of it) becomes its moves, as
+// LinuxCNC makes them (interp_cycles.cc): up to R if below it, over the hole
+// at the clearance level (the first hole: at the level the tool is at, if
+// higher than R), down to R, the pecks of G73 G83, the feed to the bottom, a
+// dwell for G82 G89, out at feed to R for G85 G89, then to the clearance
+// level. The block's
+// other words (N, F, S, M...) stay on its line, with the cycle's G code,
+// X Y Z R L P Q and polar words removed; the moves follow it.
+void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c,
+                               bool lower, bool spaces, int dec) {
+  const nc::State& s = interp_.state();
+  const int code = s.motion;
+  if (code != 730 && code != 810 && code != 820 && code != 830 && code != 850 && code != 890)
+    throw InputError(
+        file_, current_line_,
+        fmt::format(
+            "--expand-cycles writes out G73 G81 G82 G83 G85 G89 only; this is G{} (it stops "
+            "the spindle); post it without --expand-cycles (its hole bottom and R plane are "
+            "corrected)",
+            code / 10));
+  if (s.feed_mode == 930)
+    throw InputError(file_, current_line_,
+                     "--expand-cycles under inverse time feed (G93): use G94 for the cycles");
+  if (const nc::Word* p = b.find('P')) cycle_dwell_s_ = p->value;
+  write_expanded_cycle_block(b, code);
+  const size_t holes = 1 + fx.more_holes.size();
+  Vector3d at = fx.motion.start_mm;  // nominal position of the tool
+  for (size_t k = 0; k < holes; ++k) {
+    const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[k - 1];
+    const double x = h.end_mm.x(), y = h.end_mm.y();
+    auto rapid_to = [&](const Vector3d& to) {
+      expanded_rapid(c, at, to, lower, spaces);
+      at = to;
+    };
+    if (at.z() < h.r_mm) rapid_to(Vector3d(at.x(), at.y(), h.r_mm));
+    rapid_to(Vector3d(x, y, k == 0 ? at.z() : h.clear_mm));
+    if (at.z() > h.r_mm) rapid_to(Vector3d(x, y, h.r_mm));
+    if (code == 730 || code == 830) expand_pecks(c, h, code, lower, spaces, at);
+    const Vector3d bottom(x, y, h.end_mm.z());
+    expanded_feed(c, at, bottom, lower, spaces);
+    at = bottom;
+    if (code == 820 || code == 890) {
+      std::string dwell(1, lower ? 'p' : 'P');
+      dwell += nc::format_number(cycle_dwell_s_, std::max(dec, 3));
+      emit_move(4, lower, spaces, dwell);
+      ++report_.lines_added;
+    }
+    if (code == 850 || code == 890) {
+      const Vector3d r_level(x, y, h.r_mm);
+      expanded_feed(c, at, r_level, lower, spaces);
+      at = r_level;
+    }
+    if (h.clear_mm != at.z()) rapid_to(Vector3d(x, y, h.clear_mm));
+  }
+}
+
+// The pecks, as LinuxCNC makes them (convert_cycle_g73/g83): levels
+// R - Q, R - 2Q, ... above the bottom, by repeated subtraction in
+// program units and coordinates (the same count of pecks for a bottom
+// a whole number of Q below R); after each, G83 rapids out to R and
+// back down to the level reached, G73 rapids up; either stops short
+// of the level reached by 0.010 in (0.254 mm in a mm program).
+void ProgramPost::expand_pecks(const Corrector& c, const nc::Motion& h, int code, bool lower,
+                               bool spaces, Vector3d& at) {
+  const nc::State& s = interp_.state();
+  const double x = h.end_mm.x(), y = h.end_mm.y();
+  auto rapid_to = [&](const Vector3d& to) {
+    expanded_rapid(c, at, to, lower, spaces);
+    at = to;
+  };
+  const double unit = s.unit_mm, wo_z = interp_.work_offset()[2];
+  const double r_prog = s.absolute ? s.cycle_r : (h.r_mm - wo_z) / unit;
+  const double bottom_prog = s.absolute ? s.cycle_z : (h.end_mm.z() - wo_z) / unit;
+  const double back_off = unit == 1.0 ? 0.010 * 25.4 : 0.010;
+  int pecks = 0;
+  for (double depth = r_prog - s.cycle_q; depth > bottom_prog; depth -= s.cycle_q) {
+    if (++pecks > kMaxPecks)
+      throw InputError(
+          file_, current_line_,
+          fmt::format("more than {} pecks in one hole (Q {:g}); --expand-cycles would write "
+                      "them all: raise Q or post without --expand-cycles",
+                      kMaxPecks, s.cycle_q));
+    const Vector3d level(x, y, depth * unit + wo_z);
+    expanded_feed(c, at, level, lower, spaces);
+    at = level;
+    if (code == 830) rapid_to(Vector3d(x, y, h.r_mm));
+    rapid_to(Vector3d(x, y, (depth + back_off) * unit + wo_z));
+  }
+}
+
+void ProgramPost::expanded_rapid(const Corrector& c, const Vector3d& from, const Vector3d& to,
+                                 bool lower, bool spaces) {
+  ApproachDirections d;
+  const Vector3d cmd = position_command(c, from, to, false, d);
+  words_.clear();
+  append_axis_words(cmd, false, lower, spaces, words_);
+  emit_move(0, lower, spaces, words_.view());
+  ++report_.lines_added;
+  emitted_mm_ = reached(cmd, false);
+}
+
+void ProgramPost::expanded_feed(const Corrector& c, const Vector3d& from, const Vector3d& to,
+                                bool lower, bool spaces) {
+  nc::Motion m;
+  m.kind = nc::MotionKind::kLinear;
+  m.start_mm = from;
+  m.end_mm = to;
+  m.feed = interp_.state().feed;
+  const std::vector<Piece>& pieces = segment(c, m, emitted_mm_);
+  for (const Piece& piece : pieces) {
+    words_.clear();
+    append_axis_words(piece.command_mm, false, lower, spaces, words_);
+    emit_move(1, lower, spaces, words_.view());
+    ++report_.lines_added;
+    emitted_mm_ = reached(piece.command_mm, false);
+  }
+}
+
+}  // namespace volmap::post

@@ -1,0 +1,56 @@
+// ProgramPost::plain_line: the shortcut for a line of plain axis words
+// (docs/post.md "Speed"); its output is byte for byte line()'s.
+#include <vector>
+
+#include "gcode/nc_block.h"
+#include "postproc/three_axis/program_post.h"
+
+namespace volmap::post {
+
+bool ProgramPost::plain_line(std::string_view text) {
+  const nc::State& st = interp_.state();
+  // The state the line needs (the rest is execute_linear_axes's): the same
+  // tool as the last line, errors, the controller's position known, G90,
+  // no inverse time.
+  if (!options_.shortcuts || !emitted_known_ || !st.absolute || st.feed_mode == 930 ||
+      !last_corrector_ || machine_.tool_length_mm + st.tool_length_mm != last_corrector_length_ ||
+      last_corrector_->zero())
+    return false;
+  nc::PlainAxisWords words;
+  if (!nc::lex_plain_axis_words(text, words)) return false;
+  if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_)) return false;
+  // From here on, line()'s path for a straight feed move, step by step.
+  ctrl_il_known_ = false;  // the run of cycle blocks has ended
+  const Corrector& c = *last_corrector_;
+  const std::vector<Piece>& pieces = segment(c, plain_motion_, emitted_mm_);
+  if (pieces.size() == 1) {
+    bool needed = false;
+    for (int a = 0; a < 3; ++a)
+      needed =
+          needed || axis_needs_word(a, pieces[0].command_mm,
+                                    (words.given >> a & 1u) ? &words.value[a] : nullptr, false);
+    if (!needed) {  // unchanged(): the line as written, the controller where its words say (the
+                    // move's end)
+      emit(text);
+      for (int a = 0; a < 3; ++a)
+        if (words.given >> a & 1u) emitted_mm_[a] = plain_motion_.end_mm[a];
+      return true;
+    }
+  }
+  // The line's words are all axis words: the edited line is the first
+  // piece's words alone (apply_edit_to removes every word, separating
+  // spaces with them, and puts the insert in their place).
+  previous_words_.clear();
+  append_axis_words(pieces[0].command_mm, false, words.lower, words.spaced, previous_words_);
+  emit(previous_words_.view());
+  ++report_.lines_changed;
+  emitted_mm_ = pieces[0].command_mm;  // reached(): G90
+  emit_following_pieces(
+      pieces, false, words.lower, words.spaced, true, [&](size_t k, CharBuffer& w) {
+        w.clear();
+        append_axis_words(pieces[k].command_mm, false, words.lower, words.spaced, w);
+      });
+  return true;
+}
+
+}  // namespace volmap::post

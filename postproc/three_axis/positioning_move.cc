@@ -1,0 +1,143 @@
+// Positioning moves: a rapid (G0) corrected at its end point, and a canned
+// cycle block of one hole in G90 (hole position, bottom and R plane
+// corrected). Cycles of several holes and --expand-cycles: canned_cycles.cc.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "postproc/three_axis/program_post.h"
+
+namespace volmap::post {
+
+Vector3d ProgramPost::position_command(const Corrector& c, const Vector3d& from, const Vector3d& to,
+                                       bool z_down, ApproachDirections& d) {
+  d = directions_of(from, to, last_dir_);
+  if (z_down) d[2] = -1;
+  Vector3d cmd = command(c, to, d);
+  if (emitted_known_) {
+    ApproachDirections settled = d;
+    Vector3d to_flat = to, from_flat = from;
+    if (z_down) from_flat.z() = to_flat.z() = 0.0;  // Z's direction is the feed's
+    if (settle_directions(emitted_mm_, cmd, from_flat, to_flat, settled)) {
+      const bool again = !c.same_error(d, settled);
+      d = settled;
+      if (again) cmd = command(c, to, d);
+    }
+  }
+  last_dir_ = d;
+  return cmd;
+}
+
+void ProgramPost::positioning_axis_words(const nc::Block& b, const nc::BlockEffect& fx,
+                                         const Vector3d& cmd, const BlockStyle& style,
+                                         PositioningEdit& e) const {
+  const nc::Motion& m = fx.motion;
+  const nc::State& s = interp_.state();
+  const int dec = decimals();
+  const double half = half_unit(dec);
+  // A polar block (@ ^) is always rewritten as X Y: under G91 the
+  // controller would apply its increments to the corrected point, not the
+  // nominal one, and X Y next to @ ^ is an error.
+  const bool polar = b.has('@') || b.has('^');
+  if (polar)
+    for (char L : {'@', '^'})
+      if (const int i = word_index(b, L); i >= 0) e.edit.remove.push_back(i);
+  for (int a = 0; a < 3; ++a) {
+    const int idx = word_index(b, "XYZ"[a]);
+    const double new_value = program_value(a, cmd[a], fx.g53);
+    // A canned cycle's Z is the hole bottom, not where the tool stays.
+    e.needed[static_cast<size_t>(a)] =
+        m.kind == nc::MotionKind::kCycle && a == 2
+            ? (idx >= 0 ? std::abs(new_value - b.words[static_cast<size_t>(idx)].value) >= half
+                        : std::abs(cmd.z() - m.end_mm.z()) >= half * s.unit_mm)
+            : block_needs_word(b, style, fx.g53, a, cmd) || (polar && a < 2);
+    e.changed = e.changed || e.needed[static_cast<size_t>(a)];
+  }
+  // When any axis changes, the axis words are written together in X Y Z
+  // order; an unchanged one keeps its original text.
+  for (int a = 0; a < 3 && e.changed; ++a) {
+    const int idx = word_index(b, "XYZ"[a]);
+    if (!e.needed[static_cast<size_t>(a)] && idx < 0) continue;
+    if (idx >= 0) e.edit.remove.push_back(idx);
+    if (!e.insert.empty() && style.spaces) e.insert += ' ';
+    if (e.needed[static_cast<size_t>(a)]) {
+      e.insert += style.lower ? "xyz"[a] : "XYZ"[a];
+      e.insert += nc::format_number(program_value(a, cmd[a], fx.g53), dec);
+    } else {
+      const nc::Word& w = b.words[static_cast<size_t>(idx)];
+      e.insert += b.text.substr(w.begin, w.end - w.begin);
+    }
+  }
+}
+
+double ProgramPost::cycle_r_plane(const nc::Block& b, const nc::Motion& m, const Corrector& c,
+                                  const ApproachDirections& d, const Vector3d& cmd,
+                                  const BlockStyle& style, PositioningEdit& e) {
+  const nc::State& s = interp_.state();
+  const int dec = decimals();
+  const bool lower = style.lower, spaces = style.spaces;
+  enter_cycle_run();
+  // The R plane, corrected where the tool reaches it, stated every block
+  // (the correction differs from hole to hole).
+  const Vector3d r_nominal(m.end_mm.x(), m.end_mm.y(), m.r_mm);
+  const Vector3d r_cmd = command(c, r_nominal, d);
+  const double r_new = (r_cmd.z() - interp_.work_offset()[2]) / s.unit_mm;
+  const double r_nom = (m.r_mm - interp_.work_offset()[2]) / s.unit_mm;
+  if (e.changed || std::abs(r_new - r_nom) >= half_unit(dec)) {
+    // Z too, so both modal values are this hole's.
+    if (word_index(b, 'Z') < 0 && e.insert.find(lower ? 'z' : 'Z') == std::string::npos) {
+      if (!e.insert.empty() && spaces) e.insert += ' ';
+      e.insert += lower ? 'z' : 'Z';
+      e.insert += nc::format_number(program_value(2, cmd.z(), false), dec);
+    }
+    if (const int ri = word_index(b, 'R'); ri >= 0) e.edit.remove.push_back(ri);
+    if (!e.insert.empty() && spaces) e.insert += ' ';
+    e.insert += lower ? 'r' : 'R';
+    e.insert += nc::format_number(r_new, dec);
+    e.changed = true;
+  }
+  // Where the controller ends: G99 at the R it reads, G98 at the initial
+  // level or that R if higher.
+  const double r_read_mm =
+      e.changed ? written(r_new, dec) * s.unit_mm + interp_.work_offset()[2] : m.r_mm;
+  return s.g98 ? std::max(ctrl_il_mm_, r_read_mm) : r_read_mm;
+}
+
+void ProgramPost::positioning_line(std::string_view text, const nc::Block& b,
+                                   const nc::BlockEffect& fx, const Corrector& c,
+                                   const BlockStyle& style) {
+  const nc::Motion& m = fx.motion;
+  const bool cycle = m.kind == nc::MotionKind::kCycle;
+  ApproachDirections d;
+  const Vector3d cmd = position_command(c, m.start_mm, m.end_mm, cycle, d);
+  PositioningEdit e;
+  positioning_axis_words(b, fx, cmd, style, e);
+  const double cycle_clear_mm = cycle ? cycle_r_plane(b, m, c, d, cmd, style, e) : m.clear_mm;
+  if (!e.changed) {
+    write_unchanged(text, b, fx);
+    return;
+  }
+  const nc::State& s = interp_.state();
+  e.edit.insert = e.insert;
+  emit(nc::apply_edit(b, e.edit));
+  ++report_.lines_changed;
+  if (cycle) {
+    emitted_mm_ = Vector3d(cmd.x(), cmd.y(), cycle_clear_mm);
+  } else if (s.absolute) {
+    emitted_mm_ = cmd;
+  } else {
+    // G91: the controller adds the increments as written (an axis not
+    // named, or named unchanged, moves by what the block says).
+    for (int a = 0; a < 3; ++a) {
+      const int idx = word_index(b, "XYZ"[a]);
+      if (e.needed[static_cast<size_t>(a)])
+        emitted_mm_[a] += written(program_value(a, cmd[a], fx.g53), decimals()) * s.unit_mm;
+      else if (idx >= 0)
+        emitted_mm_[a] += b.words[static_cast<size_t>(idx)].value * s.unit_mm;
+    }
+  }
+  emitted_known_ = true;
+}
+
+}  // namespace volmap::post

@@ -1,0 +1,249 @@
+// ProgramPost::line: one line of the program read, executed and written;
+// the dispatch to the paths of program_post.h, lines left unchanged, and
+// feed moves (lines, arcs, helices) cut into pieces.
+#include "postproc/three_axis/program_post.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "core/common/input_error.h"
+#include "gcode/nc_path.h"
+#include "maps/tables/volumetric_table.h"
+
+namespace volmap::post {
+
+const Corrector& ProgramPost::corrector() {
+  // The tool's length: the machine file's tool (the one of offset zero)
+  // plus the active tool length offset.
+  const double offset = interp_.state().tool_length_mm;
+  const double L = machine_.tool_length_mm + offset;
+  // The same tool as the line before (almost always): no map search.
+  if (last_corrector_ && L == last_corrector_length_) return *last_corrector_;
+  auto it = correctors_.find(L);
+  if (it == correctors_.end()) {
+    if (table_ && offset != 0.0)
+      // The table's errors are those of the machine file's tool; angular
+      // errors act on another tool through another lever.
+      throw InputError(
+          file_, current_line_,
+          fmt::format("the tool length offset here is {:g} mm, but a compensation table holds the "
+                      "errors of the machine file's {:g} mm tool only; post with --errors instead",
+                      offset, machine_.tool_length_mm));
+    it = correctors_
+             .emplace(L, table_
+                             ? std::make_unique<Corrector>(machine_, *table_, options_.outside)
+                             : std::make_unique<Corrector>(machine_, errors_, L, options_.outside))
+             .first;
+  }
+  last_corrector_length_ = L;
+  last_corrector_ = it->second.get();  // map nodes stay put: the pointer stays valid
+  return *it->second;
+}
+
+BlockStyle block_style(const nc::Block& b) {
+  // One pass over the words: the indices of X, Y and Z (asked for again and
+  // again by the writer), the case of the first letter and any gap.
+  BlockStyle style;
+  bool case_known = false, spaced = false;
+  const size_t n = b.words.size();
+  std::uint32_t prev_end = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const nc::Word& w = b.words[k];
+    const char L = w.letter;
+    if (L >= 'X' && L <= 'Z' && style.axis_index[L - 'X'] < 0)
+      style.axis_index[L - 'X'] = static_cast<int>(k);
+    if (!case_known && L != '@' && L != '^') {
+      case_known = true;
+      style.lower = b.text[w.begin] >= 'a';
+    }
+    if (k > 0 && w.begin > prev_end) spaced = true;
+    prev_end = w.end;
+  }
+  style.spaces = spaced || n <= 1;
+  return style;
+}
+
+void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
+                                  const nc::BlockEffect& fx) {
+  emit(text);
+  if (fx.has_motion) {
+    if (!emitted_known_ || fx.motion.kind == nc::MotionKind::kCycle) {
+      emitted_mm_ = interp_.state().position_mm;
+    } else {
+      const nc::State& st = interp_.state();
+      for (int a = 0; a < 3; ++a) {
+        const nc::Word* w = b.find("XYZ"[a]);
+        if (!w) continue;
+        emitted_mm_[a] = st.absolute
+                             ? w->value * st.unit_mm + (fx.g53 ? 0.0 : interp_.work_offset()[a])
+                             : emitted_mm_[a] + w->value * st.unit_mm;
+      }
+    }
+  }
+  emitted_known_ = interp_.state().position_known;
+}
+
+void ProgramPost::line(std::string_view raw, int number, bool newline) {
+  current_line_ = number;
+  ++report_.lines;
+  // The line ending goes out as it came in (CRLF stays CRLF; a last line
+  // without a newline stays without one).
+  const bool cr = !raw.empty() && raw.back() == '\r';
+  const std::string_view text = cr ? raw.substr(0, raw.size() - 1) : raw;
+  line_ending_size_ = 0;
+  if (cr) line_ending_[line_ending_size_++] = '\r';
+  if (newline) line_ending_[line_ending_size_++] = '\n';
+  if (plain_line(text)) return;
+  nc::lex_block_into(text, number, file_, block_);
+  const nc::Block& b = block_;
+  const bool known_before = interp_.state().position_known;
+  const double offset_before = interp_.state().tool_length_mm;
+  nc::BlockEffect& fx = fx_;
+  interp_.execute(b, fx);
+  // A change of tool length offset moves the controlled point where the
+  // controller stands, as it moves the interpreter's (LinuxCNC).
+  if (const double offset = interp_.state().tool_length_mm; offset != offset_before)
+    emitted_mm_.z() -= offset - offset_before;
+  if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
+  const Corrector& c = corrector();
+  if (!fx.has_motion || c.zero() || b.block_delete) {
+    // Block delete: the line may or may not run on the machine; it is
+    // written unchanged and the correction goes on from its nominal end.
+    write_unchanged(text, b, fx);
+    return;
+  }
+  const nc::Motion& m = fx.motion;
+  const BlockStyle style = block_style(b);
+  if (m.kind == nc::MotionKind::kRapid) {
+    if (!known_before && !interp_.state().position_known) {
+      write_unchanged(text, b, fx);  // partial rapid from an unknown position: nothing to correct
+      return;
+    }
+  }
+  if (!emitted_known_) emitted_mm_ = m.start_mm;
+
+  if (m.kind == nc::MotionKind::kCycle && options_.expand_cycles) {
+    expand_cycle(b, fx, c, style.lower, style.spaces, decimals());
+    return;
+  }
+  if (m.kind == nc::MotionKind::kCycle &&
+      (!fx.more_holes.empty() || !interp_.state().absolute || b.find('@') || b.find('^'))) {
+    cycle_holes(b, fx, c, style.lower, style.spaces, decimals());
+    return;
+  }
+  if (m.kind == nc::MotionKind::kRapid || m.kind == nc::MotionKind::kCycle) {
+    positioning_line(text, b, fx, c, style);
+    return;
+  }
+  // Feed moves: lines, arcs and helices.
+  if (fx.stop_code)
+    throw InputError(file_, number,
+                     "a feed move and a stop code (M0/M1/M2/M30/M60) in one block; "
+                     "put the stop code on its own line");
+  feed_line(text, b, fx, c, style);
+}
+
+std::size_t ProgramPost::feed_block_removals(const nc::Block& b, const BlockStyle& style, bool arc,
+                                             bool g93, std::array<int, 12>& remove) const {
+  // The block itself becomes the first piece: its X Y Z words, its polar
+  // words @ ^ (a corrected point goes out as X Y: LinuxCNC refuses @ ^
+  // beside X Y), and an arc's I J K R P and G2/G3, G93's F give way to the
+  // piece's words. At most 3 + 2 + 5 + 1 + 1 distinct words (a letter
+  // twice, or two motion G codes, the interpreter refused).
+  std::size_t removed = 0;
+  for (int a = 0; a < 3; ++a)
+    if (style.axis_index[a] >= 0) remove[removed++] = style.axis_index[a];
+  for (char L : {'@', '^'})
+    if (const int i = word_index(b, L); i >= 0) remove[removed++] = i;
+  if (arc) {
+    for (char L : {'I', 'J', 'K', 'R', 'P'})
+      if (const int i = word_index(b, L); i >= 0) remove[removed++] = i;
+    for (size_t k = 0; k < b.words.size(); ++k)
+      if (b.words[k].letter == 'G' && (b.words[k].code10 == 20 || b.words[k].code10 == 30))
+        remove[removed++] = static_cast<int>(k);
+  }
+  if (g93)
+    if (const int i = word_index(b, 'F'); i >= 0) remove[removed++] = i;
+  // Ascending, as apply_edit_to wants (insertion sort: a handful, nearly
+  // always in order already).
+  for (std::size_t r = 1; r < removed; ++r)
+    for (std::size_t q = r; q > 0 && remove[q - 1] > remove[q]; --q)
+      std::swap(remove[q - 1], remove[q]);
+  return removed;
+}
+
+void ProgramPost::feed_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                            const Corrector& c, const BlockStyle& style) {
+  const nc::Motion& m = fx.motion;
+  const bool lower = style.lower, spaces = style.spaces;
+  const Vector3d start_cmd = emitted_mm_;
+  if (m.kind == nc::MotionKind::kArc && options_.keep_arcs && keep_arc(b, m, c, lower, spaces))
+    return;
+  const std::vector<Piece>& pieces = segment(c, m, start_cmd);
+  const bool arc = m.kind == nc::MotionKind::kArc;
+  // A straight move whose end needs no change stays as written.
+  const bool polar = b.has('@') || b.has('^');  // always rewritten as X Y (see the rapids)
+  if (!arc && pieces.size() == 1 && !polar) {
+    bool needed = false;
+    for (int a = 0; a < 3; ++a)
+      needed = needed || block_needs_word(b, style, fx.g53, a, pieces[0].command_mm);
+    if (!needed) {
+      write_unchanged(text, b, fx);
+      return;
+    }
+  }
+  const nc::State& s = interp_.state();
+  auto g93_share = [&](double s0, double s1, double step_mm) {
+    // Inverse time: the piece takes its share of the block's time. A
+    // take-up step at a reversal covers no nominal path: it takes the time
+    // of its own length at the block's nominal speed.
+    double share = s1 - s0;
+    if (share < 1e-9) {
+      const double length = nc::path_length_mm(m);
+      share = length > 0 ? step_mm / length : 0.0;
+    }
+    return std::max(1e-12, share);
+  };
+  const bool g93 = s.feed_mode == 930;
+  std::array<int, 12> remove;
+  const std::size_t removed = feed_block_removals(b, style, arc, g93, remove);
+  const bool g53 = fx.g53;
+  // The words of a piece into w (storage reused: no allocation per line).
+  auto words_for = [&](const Vector3d& cmd, double s0, double s1, CharBuffer& w) {
+    w.clear();
+    append_axis_words(cmd, g53, lower, spaces, w);
+    if (g93) {
+      char* p = w.room(2);
+      if (spaces) *p++ = ' ';
+      *p++ = lower ? 'f' : 'F';
+      w.commit(p);
+      append_number(w, s.feed / g93_share(s0, s1, (cmd - emitted_mm_).norm()), 4);
+    }
+  };
+  CharBuffer& previous_words = previous_words_;
+  words_for(pieces[0].command_mm, 0.0, pieces[0].s_end, previous_words);
+  std::string_view insert = previous_words.view();
+  if (arc) {
+    insert_.assign(lower ? "g1" : "G1");
+    if (spaces) insert_.append(" ");
+    insert_.append(insert);
+    insert = insert_.view();
+  }
+  // Straight into the output: the line can grow by the insert and a space.
+  char* out = out_buffer_.room(text.size() + insert.size() + 1 + 2);
+  end_line(nc::apply_edit_to(b, remove.data(), removed, insert, spaces, out));
+  ++report_.lines_changed;
+  emitted_mm_ = reached(pieces[0].command_mm, g53);
+  emit_following_pieces(pieces, g53, lower, spaces, !g93 && s.absolute,
+                        [&](size_t k, CharBuffer& w) {
+                          words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end, w);
+                        });
+  emitted_known_ = true;
+}
+
+}  // namespace volmap::post

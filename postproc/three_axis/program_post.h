@@ -1,0 +1,428 @@
+// ProgramPost, the three-axis post of one program line after line (internal
+// to postproc/three_axis/; post_program.h is the interface). Its pieces live
+// in one file each:
+//   program_post.cc      line(): the dispatch, unchanged lines, feed moves;
+//                        run_post and post_program
+//   positioning_move.cc  rapids and single canned-cycle blocks
+//   canned_cycles.cc     cycles one block per hole, --expand-cycles
+//   segmenter.cc         segment(): pieces within the tolerance
+//   arc_keeper.cc        keep_arc(): arcs kept as arcs
+//   plain_line.cc        plain_line(): the shortcut for plain axis words
+// The small helpers every line uses are inline here (the plain-line path is
+// benchmarked: docs/post.md "Speed").
+#pragma once
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/common/input_error.h"
+#include "gcode/nc_interpreter.h"
+#include "gcode/nc_writer.h"
+#include "postproc/three_axis/char_buffer.h"
+#include "postproc/three_axis/corrector.h"
+#include "postproc/three_axis/post_program.h"
+
+namespace volmap::post {
+
+using Eigen::Vector3d;
+
+// The direction each axis approaches `to` from `from`; an axis that does not
+// move keeps the direction it last moved in (it stands where its last move
+// left it, lost motion taken up that way).
+inline ApproachDirections directions_of(const Vector3d& from, const Vector3d& to,
+                                        const ApproachDirections& last) {
+  ApproachDirections d = last;
+  for (int a = 0; a < 3; ++a) {
+    const double delta = to[a] - from[a];
+    if (delta > 0) d[static_cast<size_t>(a)] = 1;
+    if (delta < 0) d[static_cast<size_t>(a)] = -1;
+  }
+  return d;
+}
+
+// An axis the nominal path does not move may still be commanded to creep
+// (the correction varies along the path). A creep against the direction the
+// axis last moved in is eaten by lost motion unless the command takes it up:
+// such an axis gets the direction of its commanded motion, so the command
+// for it includes the take-up step (and the piece containing the step is
+// split until the step stands alone). Returns whether d changed.
+inline bool settle_directions(const Vector3d& c0, const Vector3d& c1, const Vector3d& n0,
+                              const Vector3d& n1, ApproachDirections& d) {
+  bool changed = false;
+  for (int a = 0; a < 3; ++a) {
+    if (n1[a] != n0[a]) continue;  // the nominal motion sets the direction
+    const double creep = c1[a] - c0[a];
+    const std::int8_t want = creep > 0 ? 1 : (creep < 0 ? -1 : d[static_cast<size_t>(a)]);
+    if (want != d[static_cast<size_t>(a)]) {
+      d[static_cast<size_t>(a)] = want;
+      changed = true;
+    }
+  }
+  return changed;
+}
+
+// One commanded point of the output and the nominal path parameter it ends.
+struct Piece {
+  Vector3d command_mm;
+  double s_end;
+};
+
+/// How a block writes its words: the indices of its X, Y and Z words (-1:
+/// none), as nc::block_uses_lowercase (the case of the first letter, '@' and
+/// '^' have none) and nc::block_uses_spaces (a gap between two words; a lone
+/// word: spaces).
+struct BlockStyle {
+  int axis_index[3] = {-1, -1, -1};
+  bool lower = false;
+  bool spaces = false;
+};
+BlockStyle block_style(const nc::Block& b);
+/// The index of the block's word with letter L, or -1.
+inline int word_index(const nc::Block& b, char L) {
+  for (size_t k = 0; k < b.words.size(); ++k)
+    if (b.words[k].letter == L) return static_cast<int>(k);
+  return -1;
+}
+
+class ProgramPost {
+ public:
+  ProgramPost(const std::string& file, std::ostream& out, const Machine& machine,
+              const ErrorSet& errors, const nc::ProgramSetup& setup, const PostOptions& options,
+              const maps::VolumetricTable* table = nullptr)
+      : file_(file),
+        out_(out),
+        machine_(machine),
+        errors_(errors),
+        table_(table),
+        options_(options),
+        interp_(setup, file) {}
+
+  void line(std::string_view text, int number, bool newline);
+  /// Writes out what emit() gathered (also on failure: what was done).
+  void flush() {
+    out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
+    out_buffer_.clear();
+  }
+  // Output gathered in 64 KB pieces.
+  static constexpr std::size_t kFlushAt = std::size_t{1} << 16;
+  const PostReport& report() const { return report_; }
+
+ private:
+  const Corrector& corrector();
+  // How close a commanded point is to the exact solution of x + e(x) = p:
+  // 1e-9 mm, at least 1e4 times finer than the output resolution (1e-4 mm
+  // or 1e-5 inch by default); 1e-12 mm for 6 decimals and more.
+  double solve_accuracy_mm() const { return decimals() <= 5 ? 1e-9 : 1e-12; }
+  int decimals() const {
+    if (options_.decimals >= 0) return options_.decimals;
+    return interp_.state().unit_mm > 1.0 ? 5 : 4;
+  }
+  Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d) {
+    // Warm start from the correction of the last point corrected, moved on
+    // along the line through the last two (the fixed point is the same, to
+    // solve_accuracy_mm(); it takes a third to a half of the evaluations).
+    Vector3d cmd;
+    if (last_.corrector == &c) {
+      Vector3d guess = last_.command - last_.nominal;
+      if (before_last_.corrector == &c && c.same_error(before_last_.dir, last_.dir) &&
+          c.same_error(last_.dir, d)) {
+        const Vector3d a = last_.nominal - before_last_.nominal;
+        const double a2 = a.squaredNorm();
+        if (a2 > 0) {
+          const double t = std::clamp((nominal - last_.nominal).dot(a) / a2, 0.0, 2.0);
+          guess += t * (guess - (before_last_.command - before_last_.nominal));
+        }
+      }
+      cmd = c.command_for(nominal, d, guess, solve_accuracy_mm());
+    } else {
+      cmd = c.command_for(nominal, d);
+    }
+    before_last_ = last_;
+    last_ = {&c, nominal, cmd, d};
+    const double corr = (cmd - nominal).norm();
+    if (!std::isfinite(corr))
+      throw InputError(file_, current_line_,
+                       "the correction is not finite here; check the errors file");
+    report_.max_correction_mm = std::max(report_.max_correction_mm, corr);
+    ++report_.points_corrected;
+    return cmd;
+  }
+
+  // --- The line's paths (one file each, see the top) ---
+  /// The line as written: the controller then stands where its words say,
+  /// the axes it does not name where we left them.
+  void write_unchanged(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx);
+  /// A rapid, or a canned-cycle block of one hole in G90 (positioning_move.cc).
+  void positioning_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                        const Corrector& c, const BlockStyle& style);
+  /// The axis words of a positioning block, and whether any changed.
+  struct PositioningEdit {
+    nc::BlockEdit edit;
+    std::string insert;
+    bool changed = false;
+    std::array<bool, 3> needed{};
+  };
+  void positioning_axis_words(const nc::Block& b, const nc::BlockEffect& fx, const Vector3d& cmd,
+                              const BlockStyle& style, PositioningEdit& e) const;
+  /// A cycle block's R plane (and Z with it) into e; returns the level the
+  /// controller ends the hole at.
+  double cycle_r_plane(const nc::Block& b, const nc::Motion& m, const Corrector& c,
+                       const ApproachDirections& d, const Vector3d& cmd, const BlockStyle& style,
+                       PositioningEdit& e);
+  /// A feed move (lines, arcs, helices): the block as its first piece, the
+  /// others after it.
+  void feed_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                 const Corrector& c, const BlockStyle& style);
+  /// The words the block's first piece replaces, ascending, into remove;
+  /// returns how many.
+  std::size_t feed_block_removals(const nc::Block& b, const BlockStyle& style, bool arc, bool g93,
+                                  std::array<int, 12>& remove) const;
+  /// Does axis a need a new word to command cmd? Compared with what the
+  /// block writes (or, for an absent word, with staying put).
+  bool block_needs_word(const nc::Block& b, const BlockStyle& style, bool g53, int a,
+                        const Vector3d& cmd) const {
+    const int idx = style.axis_index[a];
+    return axis_needs_word(a, cmd, idx >= 0 ? &b.words[static_cast<size_t>(idx)].value : nullptr,
+                           g53);
+  }
+
+  const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m,
+                                    const Vector3d& start_cmd);
+  /// The number of initial pieces of an arc: the chord error below tol / 4.
+  int arc_initial_pieces(const nc::Motion& m) const;
+  /// The deviation of the actual tip at a piece's start (c0 commanded for
+  /// nominal n0p, directions d), kept while a piece is halved (the halves
+  /// share their start).
+  double start_deviation(const Corrector& c, const Vector3d& c0, const Vector3d& n0p,
+                         const ApproachDirections& d);
+  /// PostOptions::keep_arcs: writes the arc block `b` (motion m) as the
+  /// corrected arc when that arc keeps the tolerance, and returns true;
+  /// false (nothing written, nothing changed) when it does not or cannot.
+  bool keep_arc(const nc::Block& b, const nc::Motion& m, const Corrector& c, bool lower,
+                bool spaces);
+  /// A kept arc's lines, in order: arcs and take-up steps (G1), their words.
+  struct KeptLine {
+    bool arc;
+    std::string words;
+  };
+  struct ArcPlan;
+  /// The arc's pieces between quadrant points for keep_arc (docs/post.md
+  /// "Arcs kept as arcs"); false when the arc cannot be kept.
+  bool kept_arc_lines(const nc::Motion& m, const Corrector& c, bool lower, bool spaces,
+                      std::vector<KeptLine>& lines);
+  /// Piece k of the plan (cuts[k] to cuts[k + 1]): its lines added when it
+  /// keeps the tolerance, else false.
+  bool kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const Corrector& c, std::size_t k,
+                      std::vector<KeptLine>& lines);
+  /// A kept piece's lines: the take-up step to c0 when `step` (and not
+  /// below the output's resolution), then the arc `cmd`.
+  void add_kept_arc_piece_lines(const ArcPlan& plan, bool step, const Vector3d& c0,
+                                const nc::Motion& cmd, const ApproachDirections& d,
+                                std::vector<KeptLine>& lines);
+  /// The kept arc's lines out, the first in the block's place.
+  void write_kept_arc(const nc::Block& b, const nc::Motion& m, bool lower, bool spaces,
+                      const std::vector<KeptLine>& lines);
+  /// The line when it is plain axis words (nc::lex_plain_axis_words) of a
+  /// G1 move in G90 and G94/G95, the controller's position known, the tool
+  /// the last line's: what line() does with it, without a Block, a
+  /// BlockEffect or an edit (the usual line of a three-axis CAM program).
+  /// Returns false, having changed nothing, for any other line.
+  bool plain_line(std::string_view text);
+  /// A line "G<g> <words>": the one-digit G code in the block's case, a
+  /// space when the block spaces its words, the words (one writer for the
+  /// added lines of feed moves, expanded cycles and kept arcs).
+  void emit_move(int g, bool lower, bool spaces, std::string_view words) {
+    char* l = out_buffer_.room(3 + words.size() + 2);
+    *l++ = lower ? 'g' : 'G';
+    *l++ = static_cast<char>('0' + g);
+    if (spaces) *l++ = ' ';
+    std::memcpy(l, words.data(), words.size());
+    end_line(l + words.size());
+  }
+  /// pieces[1..] of a feed move, each as "G1 X.. Y.. Z.." (words_for(k, w)
+  /// writes piece k's words into w). A piece whose words repeat the line
+  /// before (a lost-motion step below the output resolution) is left out
+  /// when `skip_repeats`.
+  template <class WordsFor>
+  void emit_following_pieces(const std::vector<Piece>& pieces, bool g53, bool lower, bool spaces,
+                             bool skip_repeats, WordsFor&& words_for) {
+    for (size_t k = 1; k < pieces.size(); ++k) {
+      words_for(k, words_);
+      // A piece below the output resolution (a lost-motion step at a
+      // reversal) would repeat the line before it: the controller cannot
+      // command it, so it is not written.
+      if (skip_repeats && words_.view() == previous_words_.view()) continue;
+      previous_words_.assign(words_.view());
+      emit_move(1, lower, spaces, words_.view());
+      ++report_.lines_added;
+      emitted_mm_ = reached(pieces[k].command_mm, g53);
+    }
+  }
+  static double half_unit(int dec) {
+    static constexpr double kHalfUnit[] = {0.5,  0.05, 5e-3, 5e-4, 5e-5,
+                                           5e-6, 5e-7, 5e-8, 5e-9, 5e-10};
+    return dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
+  }
+  nc::Motion plain_motion_;  ///< plain_line()'s motion (only its kind and ends change)
+  void cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
+                   bool spaces, int dec);
+  void expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
+                    bool spaces, int dec);
+  /// The block's line without its cycle words, written unless blank.
+  void write_expanded_cycle_block(const nc::Block& b, int code);
+  /// The pecks of G73 G83 down to hole h's bottom, from nominal *at.
+  void expand_pecks(const Corrector& c, const nc::Motion& h, int code, bool lower, bool spaces,
+                    Vector3d& at);
+  /// A G0 from nominal point `from` to `to` (corrected at its end), written as a line.
+  void expanded_rapid(const Corrector& c, const Vector3d& from, const Vector3d& to, bool lower,
+                      bool spaces);
+  /// A feed move from where the tool is (nominally `from`) to `to`, segmented
+  /// within tolerance, written as G1 lines.
+  void expanded_feed(const Corrector& c, const Vector3d& from, const Vector3d& to, bool lower,
+                     bool spaces);
+  double cycle_dwell_s_ = 0.0;  ///< P of G82/G89, modal as in LinuxCNC
+  /// The program value the controller reads from a number written with
+  /// `dec` decimals (what format_number writes, read back).
+  /// The controller's initial level of the run of cycle blocks (LinuxCNC's
+  /// cycle_il, State::cycle_il_mm): the Z it stood at, as commanded, when
+  /// the run began.
+  void enter_cycle_run() {
+    if (ctrl_il_known_) return;
+    ctrl_il_known_ = true;
+    ctrl_il_mm_ = emitted_mm_.z();
+  }
+  /// Where the controller stands after a piece's axis words (all three
+  /// written) for cmd: cmd under G90 (the numbers are as near to it as the
+  /// decimals allow); under G91 the last position plus the increments as
+  /// written, so that the rounding of one increment is made good by the
+  /// next instead of adding up along the program.
+  Vector3d reached(const Vector3d& cmd, bool g53) const {
+    const nc::State& st = interp_.state();
+    if (st.absolute) return cmd;
+    Vector3d r;
+    for (int a = 0; a < 3; ++a)
+      r[a] = emitted_mm_[a] + written(program_value(a, cmd[a], g53), decimals()) * st.unit_mm;
+    return r;
+  }
+  /// The command of a positioning move (a rapid, or the traverse over a
+  /// hole and down) from nominal `from` to `to`, and its approach directions
+  /// in *d: an axis the nominal move moves takes its direction; one it does
+  /// not move but the correction makes creep takes the creep's direction, so
+  /// the command takes up its play that way (as segment() does for feed
+  /// moves) instead of leaving it half taken up; `z_down` fixes Z to -1 (a
+  /// cycle's feed into the hole).
+  Vector3d position_command(const Corrector& c, const Vector3d& from, const Vector3d& to,
+                            bool z_down, ApproachDirections& d);
+  bool ctrl_il_known_ = false;
+  double ctrl_il_mm_ = 0.0;
+  static double written(double value, int dec) {
+    return std::strtod(nc::format_number(value, dec).c_str(), nullptr);
+  }
+  // Program value of axis a for commanded machine position v.
+  double program_value(int a, double v_mm, bool g53) const {
+    const nc::State& s = interp_.state();
+    const double d =
+        s.absolute ? v_mm - (g53 ? 0.0 : interp_.work_offset()[a]) : v_mm - emitted_mm_[a];
+    return s.unit_mm == 1.0 ? d : d / s.unit_mm;  // x / 1 is x: no division in mm (the same bits)
+  }
+  /// Whether axis a needs a new word to command cmd: the number written for
+  /// it would differ, at the output's resolution, from `old_value` (the
+  /// block's own word, program units) or, without one, from where the
+  /// controller stands (G90; no increment under G91).
+  bool axis_needs_word(int a, const Vector3d& cmd, const double* old_value, bool g53) const {
+    const double old = old_value                  ? *old_value
+                       : interp_.state().absolute ? program_value(a, emitted_mm_[a], g53)
+                                                  : 0.0;
+    return std::abs(program_value(a, cmd[a], g53) - old) >= half_unit(decimals());
+  }
+  void append_axis_words(const Vector3d& cmd, bool g53, bool lower, bool spaces, CharBuffer& s) {
+    const int dec = decimals();
+    const char* letters = lower ? "xyz" : "XYZ";
+    // Room for the three words at once; a number the fast path does not
+    // write (rare) goes in through format_number.
+    constexpr std::size_t kRoom = 3 * (2 + nc::kNumberRoom);
+    char* p = s.room(kRoom);
+    for (int a = 0; a < 3; ++a) {
+      if (a > 0 && spaces) *p++ = ' ';
+      *p++ = letters[a];
+      const double v = program_value(a, cmd[a], g53);
+      if (char* end = nc::format_number_fast(v, dec, p)) {
+        p = end;
+      } else {
+        s.commit(p);
+        s.append(nc::format_number(v, dec));
+        p = s.room(kRoom);
+      }
+    }
+    s.commit(p);
+  }
+  void end_line(char* p) {
+    std::memcpy(p, line_ending_, 2);  // room for both was made; only the ending's length counts
+    out_buffer_.commit(p + line_ending_size_);
+    if (out_buffer_.size() >= kFlushAt) flush();
+  }
+  void emit(std::string_view text) {
+    char* p = out_buffer_.room(text.size() + 2);
+    std::memcpy(p, text.data(), text.size());
+    end_line(p + text.size());
+  }
+
+  std::string file_;
+  std::ostream& out_;
+  const Machine& machine_;
+  const ErrorSet& errors_;
+  const maps::VolumetricTable* table_;  ///< instead of errors_ when set
+  PostOptions options_;
+  nc::Interpreter interp_;
+  std::map<double, std::unique_ptr<Corrector>> correctors_;
+  const Corrector* last_corrector_ = nullptr;  ///< corrector()'s last answer, for this tool length:
+  double last_corrector_length_ = 0.0;
+  nc::BlockEffect fx_;  ///< the line's effect (storage reused line after line)
+  PostReport report_;
+  Vector3d emitted_mm_ = Vector3d::Zero();  ///< last commanded position written
+  bool emitted_known_ = false;
+  ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
+  int current_line_ = 0;
+  char line_ending_[2] = {};  ///< the line's ending as read: "", "\n", "\r" or "\r\n"
+  std::size_t line_ending_size_ = 0;
+  CharBuffer out_buffer_;
+  nc::Block block_;  ///< the line being read (storage reused line after line)
+  struct Pending {
+    double s0, s1;
+    Vector3d c0;
+    ApproachDirections dir0;  ///< axis directions on arrival at s0
+    bool stepped = false;     ///< the take-up step at s0 was commanded
+  };
+  std::vector<Piece> pieces_;                   ///< segment()'s result (storage reused)
+  std::vector<Pending> stack_;                  ///< segment()'s work list (storage reused)
+  CharBuffer words_, previous_words_, insert_;  ///< scratch of the writer (storage reused)
+  /// The last point corrected: command solves command + e(command, dir) =
+  /// nominal (to solve_accuracy_mm()).
+  struct LastCorrected {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+  } last_, before_last_;
+  /// The deviation of the actual tip at a piece's start (kept while a piece
+  /// is halved: the halves share their start).
+  struct StartDeviation {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+    double deviation = 0.0;
+  } start_dev_;
+};
+
+}  // namespace volmap::post

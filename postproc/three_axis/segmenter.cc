@@ -1,0 +1,163 @@
+// ProgramPost::segment: a move cut into pieces until the actual path stays
+// within the tolerance of the nominal one (docs/post.md).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "core/common/input_error.h"
+#include "gcode/nc_path.h"
+#include "postproc/three_axis/program_post.h"
+
+namespace volmap::post {
+
+// Pieces of one move at most (an arc's initial pieces, and all pieces).
+constexpr int kMaxArcPieces = 1 << 16;
+
+int ProgramPost::arc_initial_pieces(const nc::Motion& m) const {
+  const double tol = options_.tolerance_mm;
+  // Initial pieces: arcs so that the chord error is below tol / 4.
+  const nc::ArcGeometry g = nc::arc_geometry(m);
+  const double r = std::max(g.radius, g.end_radius);
+  const double max_step = r > tol / 4 ? 2.0 * std::acos(1.0 - (tol / 4) / r) : M_PI / 2;
+  const double pieces = std::ceil(std::abs(g.sweep) / max_step);
+  if (!(pieces <= kMaxArcPieces))  // also NaN: never cast to int out of range
+    throw InputError(
+        file_, current_line_,
+        fmt::format("the arc needs more than {} pieces to keep {:g} um (radius {:g} mm); "
+                    "raise --tolerance-um or check the arc's centre",
+                    kMaxArcPieces, tol * 1e3, r));
+  return std::max(4, static_cast<int>(pieces));
+}
+
+double ProgramPost::start_deviation(const Corrector& c, const Vector3d& c0, const Vector3d& n0p,
+                                    const ApproachDirections& d) {
+  if (start_dev_.corrector == &c && start_dev_.command == c0 && start_dev_.nominal == n0p &&
+      c.same_error(start_dev_.dir, d))
+    return start_dev_.deviation;  // the same start, halved again
+  const double dev0 = (c0 + c.error_at(c0, d) - n0p).norm();
+  start_dev_ = {&c, n0p, c0, d, dev0};
+  return dev0;
+}
+
+const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
+                                               const Vector3d& start_cmd) {
+  const double tol = options_.tolerance_mm;
+  // Initial pieces: arcs so that the chord error is below tol / 4; a line whole.
+  const int n0 = m.kind == nc::MotionKind::kArc ? arc_initial_pieces(m) : 1;
+  std::vector<Piece>& done = pieces_;
+  std::vector<Pending>& stack = stack_;
+  done.clear();
+  stack.clear();
+  Vector3d c_prev = start_cmd;
+  double s_prev = 0.0;
+  constexpr int kMaxPieces = kMaxArcPieces;
+  for (int k = 1; k <= n0; ++k) {
+    stack.push_back({s_prev, static_cast<double>(k) / n0, c_prev, last_dir_, false});
+    while (!stack.empty()) {
+      const Pending p = stack.back();
+      stack.pop_back();
+      const Vector3d n0p = nc::point_on(m, p.s0), n1p = nc::point_on(m, p.s1);
+      // Is the piece's start the last point corrected? Then its actual
+      // deviation is known without evaluating e (below).
+      const bool start_known = last_.corrector == &c && p.c0 == last_.command;
+      const LastCorrected start = last_;
+      ApproachDirections d = directions_of(n0p, n1p, p.dir0);
+      Vector3d c1 = command(c, n1p, d);
+      const ApproachDirections d_before = d;
+      if (settle_directions(p.c0, c1, n0p, n1p, d)) {
+        // A direction that changes the error (an axis with lost motion)
+        // needs the point again; others only change the bookkeeping.
+        if (c.same_error(d_before, d))
+          last_.dir = d;
+        else
+          c1 = command(c, n1p, d);
+      }
+      bool ok = true;
+      bool sample = true;
+      if (m.kind == nc::MotionKind::kLinear) {
+        // The deviation of the actual path from the nominal line,
+        // dev(t) = x(t) + e(x(t)) - n(t) with x and n linear in t, is the
+        // chord of its end values plus a part whose second derivative is
+        // D2e[c1 - c0, c1 - c0]: |dev(t)| <= max(|dev(0)|, |dev(1)|) +
+        // K |c1 - c0|^2 / 8 (Corrector::chord_deviation_bound). |dev(1)| is
+        // the fixed point's residual; |dev(0)| too when the start is the last
+        // point corrected with the same directions. Only when that bound
+        // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
+        const double kResidual = 2 * solve_accuracy_mm() + 1e-12;
+        // The start is the last point corrected with the same directions:
+        // an upper bound without evaluating e; else exact.
+        const bool dev0_exact = !(start_known && c.same_error(start.dir, d));
+        const double dev0 = dev0_exact ? start_deviation(c, p.c0, n0p, d)
+                                       : kResidual + (start.nominal - n0p).norm();
+        const double chord = c.chord_deviation_bound(p.c0, c1);
+        const double bound = std::max(dev0, kResidual) + chord;
+        if (bound <= tol) sample = false;
+        // The other way round: at t = 1/4 the deviation is at least
+        // 3/4 |dev(0)| - 1/4 |dev(1)| - 3/32 K |c1 - c0|^2. When that exceeds
+        // the tolerance (a lost-motion step at the start), the sample at 1/4
+        // would fail: the piece is split without evaluating it.
+        if (sample && dev0_exact && 0.75 * dev0 - kResidual - 0.75 * chord - 1e-12 > tol) {
+          sample = false;
+          ok = false;
+          if (!p.stepped) {
+            // The step stands at the start (lost motion taken up at a
+            // reversal): halving would close in on it in some thirty levels
+            // to a piece shorter than 1e-9 of the move. The take-up is
+            // commanded at once instead, at the start point with the new
+            // directions (the actual tip stays on the start point while the
+            // play is taken up), and the piece goes on from there.
+            const Vector3d c_step = command(c, n0p, d);
+            done.push_back({c_step, p.s0});
+            c_prev = c_step;
+            s_prev = p.s0;
+            last_dir_ = d;
+            Pending rest = p;
+            rest.c0 = c_step;
+            rest.dir0 = d;
+            rest.stepped = true;
+            stack.push_back(rest);
+            continue;
+          }
+        }
+      }
+      for (double t : {0.25, 0.5, 0.75}) {
+        if (!sample) break;
+        const Vector3d x = p.c0 + t * (c1 - p.c0);
+        const Vector3d actual = x + c.error_at(x, d);
+        const Vector3d nominal = nc::point_on(m, p.s0 + t * (p.s1 - p.s0));
+        if ((actual - nominal).norm() > tol) {
+          ok = false;
+          break;
+        }
+      }
+      if (ok || p.s1 - p.s0 < 1e-9) {
+        done.push_back({c1, p.s1});
+        if (done.size() > kMaxPieces)
+          throw InputError(
+              file_, current_line_,
+              fmt::format("more than {} pieces needed to keep {:g} um; raise --tolerance-um",
+                          kMaxPieces, tol * 1e3));
+        c_prev = c1;
+        s_prev = p.s1;
+        last_dir_ = d;
+        // Continue with all that is left of this initial piece as one piece
+        // (split again only where needed): after a lost-motion step the
+        // rest need not stay cut into ever smaller halves.
+        if (!stack.empty()) {
+          const double end = stack.front().s1;
+          stack.clear();
+          stack.push_back({p.s1, end, c1, d, false});
+        }
+      } else {
+        const double mid = 0.5 * (p.s0 + p.s1);
+        stack.push_back({mid, p.s1, Vector3d::Zero(), p.dir0, false});  // c0, dir0 set when reached
+        stack.push_back({p.s0, mid, p.c0, p.dir0, p.stepped});
+      }
+    }
+  }
+  return done;
+}
+
+}  // namespace volmap::post

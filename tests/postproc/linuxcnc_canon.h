@@ -1,0 +1,149 @@
+// rs274, LinuxCNC's interpreter, as the tests of tests/postproc/linuxcnc*
+// use it: whether it is installed, its canonical calls read back (the
+// nominal feeds and every commanded end point), `volmap post` on the sample
+// machine, and tool tables for both.
+#pragma once
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gcode/nc_path.h"
+#include "tests/support/rs274.h"
+#include "tests/support/test_paths.h"
+
+namespace volmap {
+
+namespace fs = std::filesystem;
+
+inline bool have_rs274() { return std::system("command -v rs274 >/dev/null 2>&1") == 0; }
+
+inline void require_rs274() {
+  if (have_rs274()) return;
+  if (std::getenv("VOLMAP_REQUIRE_RS274"))
+    FAIL() << "rs274 (linuxcnc-uspace) is required but missing";
+  GTEST_SKIP() << "rs274 not installed (apt-get install linuxcnc-uspace)";
+}
+
+struct Canon {
+  double unit_mm = 1.0;           ///< rs274 prints 4 decimals in the program's unit
+  std::vector<nc::Motion> feeds;  // nominal path, program units -> mm
+  std::vector<std::pair<Eigen::Vector3d, bool>> points;  // every commanded end point, feed?
+  bool ok = true;
+  std::string errors;
+};
+
+// Runs rs274 on a program and reads its canonical calls.
+inline Canon canonical(const std::string& program, const std::string& tool_table) {
+  // Written under this test run's temporary folder, never beside the program
+  // (LinuxCNC's own programs are in a system folder other runs share).
+  static const fs::path dir = test::fresh_dir("canon");
+  static int count = 0;
+  const std::string out =
+      (dir / (std::to_string(++count) + "-" + fs::path(program).filename().string() + ".canon"))
+          .string();
+  const std::string cmd = "cd " + fs::path(program).parent_path().string() + " && " +
+                          test::rs274_command((tool_table.empty() ? "" : "-t " + tool_table + " ") +
+                                              "-g " + program + " " + out) +
+                          " >" + out + ".log 2>&1";
+  Canon c;
+  c.ok = std::system(cmd.c_str()) == 0;
+  std::ifstream f(out);
+  std::string line;
+  double unit = 1.0;
+  int plane = 0;
+  Eigen::Vector3d pos = Eigen::Vector3d::Zero();
+  auto numbers = [](const std::string& l) {
+    std::vector<double> v;
+    const size_t open = l.find('('), close = l.rfind(')');
+    std::stringstream ss(l.substr(open + 1, close - open - 1));
+    std::string tok;
+    while (std::getline(ss, tok, ',')) v.push_back(std::strtod(tok.c_str(), nullptr));
+    return v;
+  };
+  while (std::getline(f, line)) {
+    if (line.find("USE_LENGTH_UNITS(CANON_UNITS_INCHES)") != std::string::npos)
+      unit = c.unit_mm = 25.4;
+    if (line.find("USE_LENGTH_UNITS(CANON_UNITS_MM)") != std::string::npos) unit = 1.0;
+    if (line.find("SELECT_PLANE(CANON_PLANE_XY)") != std::string::npos) plane = 0;
+    if (line.find("SELECT_PLANE(CANON_PLANE_XZ)") != std::string::npos) plane = 1;
+    if (line.find("SELECT_PLANE(CANON_PLANE_YZ)") != std::string::npos) plane = 2;
+    if (line.find("rror") != std::string::npos) c.errors += line + "\n";
+    const bool traverse = line.find("STRAIGHT_TRAVERSE(") != std::string::npos;
+    const bool feed = line.find("STRAIGHT_FEED(") != std::string::npos;
+    if (traverse || feed) {
+      const std::vector<double> v = numbers(line);
+      const Eigen::Vector3d p(v[0] * unit, v[1] * unit, v[2] * unit);
+      if (feed) {
+        nc::Motion m;
+        m.kind = nc::MotionKind::kLinear;
+        m.start_mm = pos;
+        m.end_mm = p;
+        c.feeds.push_back(m);
+      }
+      c.points.push_back({p, feed});
+      pos = p;
+    }
+    if (line.find("ARC_FEED(") != std::string::npos) {
+      // ARC_FEED(first_end, second_end, first_centre, second_centre,
+      //          rotation, axis_end, a, b, c); XY: first X; XZ (G18): first
+      // Z, second X; YZ (G19): first Y, second Z.
+      const std::vector<double> v = numbers(line);
+      static constexpr int kFirst[3] = {0, 2, 1}, kSecond[3] = {1, 0, 2}, kAxis[3] = {2, 1, 0};
+      nc::Motion m;
+      m.kind = nc::MotionKind::kArc;
+      m.start_mm = pos;
+      m.end_mm[kFirst[plane]] = v[0] * unit;
+      m.end_mm[kSecond[plane]] = v[1] * unit;
+      m.end_mm[kAxis[plane]] = v[5] * unit;
+      m.center_mm = pos;
+      m.center_mm[kFirst[plane]] = v[2] * unit;
+      m.center_mm[kSecond[plane]] = v[3] * unit;
+      const int rotation = static_cast<int>(v[4]);
+      m.clockwise = rotation < 0;
+      m.extra_turns = std::abs(rotation) - 1;
+      // volmap's planes: 0 XY (I J), 1 ZX (K I), 2 YZ (J K).
+      m.plane = plane;
+      c.feeds.push_back(m);
+      // The commanded end of an arc; its interior is the controller's.
+      c.points.push_back({m.end_mm, true});
+      pos = m.end_mm;
+    }
+  }
+  return c;
+}
+
+// `volmap post` on the sample three-axis machine with its errors, args after
+// (work offset, input, -o output, ...), for std::system.
+inline std::string hsu_post_command(const std::string& args) {
+  return test::volmap_binary() + " post --machine " +
+         test::source_path("samples/machines/hsu-3axis.json") + " --errors " +
+         test::source_path("samples/errors/hsu-3axis.csv") + " " + args;
+}
+
+// The same tool table twice, for rs274 (which reads it in inches) and for
+// volmap (mm): {inch file, mm file}, tools numbered from 1 with the offsets
+// given in inches.
+inline std::pair<std::string, std::string> tool_tables(const fs::path& dir,
+                                                       std::initializer_list<double> offsets_inch) {
+  const std::string inch = (dir / "inch.tbl").string(), mm = (dir / "mm.tbl").string();
+  std::ofstream fi(inch), fm(mm);
+  int tool = 0;
+  for (double z : offsets_inch) {
+    ++tool;
+    fi << fmt::format("T{0} P{0} Z{1} ;\n", tool, z);
+    fm << fmt::format("T{0} P{0} Z{1} ;\n", tool, z * 25.4);
+  }
+  return {inch, mm};
+}
+
+}  // namespace volmap
