@@ -266,6 +266,7 @@ Identifiability analyse_identifiability(Eigen::MatrixXd& J, const Machine& m, Ga
   N = Eigen::MatrixXd::Zero(P, P);
   N.selfadjointView<Eigen::Lower>().rankUpdate(Js.transpose());
   N.triangularView<Eigen::StrictlyUpper>() = N.transpose();
+  if (P == 0) return id;  // nothing to analyse (and no 0 x 0 eigensolve)
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(N);
   const Eigen::VectorXd lambda = eig.eigenvalues();  // ascending
   const double sigma_max = std::sqrt(std::max(lambda[P - 1], 0.0));

@@ -47,9 +47,13 @@ EstimatedSet estimated_set(const Identifiability& id) {
       Nk(a, b) =
           id.normal(s.kept[static_cast<std::size_t>(a)], s.kept[static_cast<std::size_t>(b)]);
   s.ldlt.compute(Nk);
+  // Nothing left to estimate (every parameter fixed): Eigen's eigensolver
+  // must not see a 0 x 0 matrix (it read past it and crashed, on a one-axis
+  // laser recording with the three-axis sample machine).
+  if (Kp == 0) return s;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ek(Nk, Eigen::EigenvaluesOnly);
   const double lo = std::max(ek.eigenvalues()[0], 0.0);
-  s.condition_number = Kp == 0 ? 0.0 : lo > 0 ? std::sqrt(ek.eigenvalues()[Kp - 1] / lo) : INFINITY;
+  s.condition_number = lo > 0 ? std::sqrt(ek.eigenvalues()[Kp - 1] / lo) : INFINITY;
   return s;
 }
 

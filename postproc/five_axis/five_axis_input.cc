@@ -14,8 +14,6 @@
 namespace volmap::post {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-
 std::string upper(std::string s) {
   for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return s;
@@ -33,22 +31,6 @@ bool is_apt_statement(const std::string& line) {
       R"(^\s*(GOTO|FEDRAT|PARTNO|MULTAX|UNITS|LOADTL|SPINDL|COOLNT|CUTTER|RAPID|FINI|TLAXIS|MACHIN|FROM|INTOL|OUTTOL|PPRINT|CLDATA|TOOLNO)\s*(/|$))",
       std::regex::icase);
   return std::regex_search(line, kApt);
-}
-
-// Replaces Siemens A3= B3= C3= by I, J, K padded to the same length, so that
-// byte spans stay those of the original line.
-bool replace_siemens_vector(std::string& text) {
-  bool any = false;
-  for (size_t i = 0; i + 2 < text.size(); ++i) {
-    const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(text[i])));
-    if ((c == 'A' || c == 'B' || c == 'C') && text[i + 1] == '3' && text[i + 2] == '=') {
-      text[i] = c == 'A' ? 'I' : (c == 'B' ? 'J' : 'K');
-      text[i + 1] = ' ';
-      text[i + 2] = ' ';
-      any = true;
-    }
-  }
-  return any;
 }
 
 // Comment text that a G-code comment can hold.
@@ -226,7 +208,7 @@ void FiveAxisReader::apt_line(std::string stmt, FiveAxisLine& out) {
     }
     m.a1 = axis_;
     m.q0 = m.q1 = q_;
-    m.feed_mode = 940;
+    m.feed_mode = nc::kG94UnitsPerMinute;
     m.feed = feed_;
     if (!m.rapid && feed_ <= 0) fail(1, "GOTO feed move before any FEDRAT; add FEDRAT/");
     tip_mm_ = m.tip.end_mm;
@@ -287,218 +269,6 @@ void FiveAxisReader::apt_line(std::string stmt, FiveAxisLine& out) {
     return;
   }
   out.text = "(APT: " + comment_text(stmt) + ")";
-}
-
-void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
-  std::string text = raw;
-  if (form_ == InputForm::kToolVector) replace_siemens_vector(text);
-  out.block = nc::lex_block(text, line_, file_);
-  const nc::Block& b = out.block;
-  if (b.block_delete)
-    fail(1, "block delete '/' is not supported by the five-axis post; remove the '/' or the block");
-  const bool vector = form_ == InputForm::kToolVector;
-  // Step 1: every word known; modal words first.
-  int motion_word = -1;
-  bool g93 = false, g94 = false, dwell = false;
-  std::array<const nc::Word*, 26> word{};
-  for (size_t k = 0; k < b.words.size(); ++k) {
-    const nc::Word& w = b.words[k];
-    const int col = static_cast<int>(w.begin) + 1;
-    if (w.letter == 'G') {
-      switch (w.code10) {
-        case 0:
-        case 10:
-        case 20:
-        case 30:
-          if (motion_word >= 0) fail(col, "two motion G codes in one block");
-          motion_word = w.code10;
-          break;
-        case 40:
-          dwell = true;
-          break;
-        case 170:
-          plane_ = 0;
-          break;
-        case 180:
-          plane_ = 1;
-          break;
-        case 190:
-          plane_ = 2;
-          break;
-        case 200:
-          unit_mm_ = 25.4;
-          break;
-        case 210:
-          unit_mm_ = 1.0;
-          break;
-        case 900:
-          absolute_ = true;
-          break;
-        case 910:
-          absolute_ = false;
-          break;
-        case 901:
-          arc_absolute_ = true;
-          break;
-        case 911:
-          arc_absolute_ = false;
-          break;
-        case 930:
-          g93 = true;
-          break;
-        case 940:
-          g94 = true;
-          break;
-        case 400:
-        case 490:
-        case 800:
-        case 540:
-        case 610:
-        case 611:
-        case 640:
-          break;
-        case 430:
-        case 431:
-          fail(col,
-               "tool length compensation (G43) is not supported by the five-axis post: the machine "
-               "file's tool is the tool; give its length there");
-        default:
-          if (w.code10 >= 550 && w.code10 <= 593)
-            fail(col,
-                 "only G54 is accepted: the program origin is one point on the table "
-                 "(--part-origin); post each work offset's part separately");
-          fail(col,
-               fmt::format("G{} is not supported by the five-axis post; output it without from CAM",
-                           nc::format_number(w.value, 4)));
-      }
-      continue;
-    }
-    if (w.letter == 'M') {
-      if (w.code10 == 4280 || w.code10 == 4290 || w.code10 == 4300)
-        out.strip.push_back(static_cast<int>(k));
-      if (w.code10 == 20 || w.code10 == 300) out.ends_program = true;
-      continue;
-    }
-    const char L = w.letter;
-    if (L == 'N' || L == 'S' || L == 'T') continue;
-    if (L == 'F' || L == 'P' || L == 'X' || L == 'Y' || L == 'Z' || L == 'I' || L == 'J' ||
-        L == 'K') {
-      if (word[static_cast<size_t>(L - 'A')])
-        fail(col, fmt::format("word {} twice in one block", L));
-      word[static_cast<size_t>(L - 'A')] = &w;
-      continue;
-    }
-    if (L == 'A' || L == 'B' || L == 'C') {
-      const auto axis = axis_from_char(L);
-      if (vector)
-        fail(col,
-             fmt::format("rotary word {} in a tool-vector program; give the tool axis as I J K "
-                         "(or use --input-form tcp)",
-                         L));
-      if (!axis || !machine_.index_of(*axis))
-        fail(col, fmt::format("the machine has no axis {}", L));
-      if (word[static_cast<size_t>(L - 'A')])
-        fail(col, fmt::format("word {} twice in one block", L));
-      word[static_cast<size_t>(L - 'A')] = &w;
-      continue;
-    }
-    if (L == 'R')
-      fail(col, "R-form arcs are not supported by the five-axis post; output I J K centres");
-    if (L == '@' || L == '^')
-      fail(col, "polar coordinates (@ ^) are not supported by the five-axis post; output X and Y");
-    fail(col, fmt::format("word {} is not supported by the five-axis post", L));
-  }
-  if (g93 && g94) fail(1, "G93 and G94 in one block");
-  if (g93) feed_mode_ = 930;
-  if (g94) feed_mode_ = 940;
-  if (word['F' - 'A']) {
-    const double f = word['F' - 'A']->value;
-    feed_ = feed_mode_ == 930 ? f : f * unit_mm_;
-  } else if (g93 || g94) {
-    feed_ = 0.0;  // a new feed mode needs a new F (RS274NGC)
-  }
-  if (motion_word >= 0) motion_ = motion_word;
-  out.motion_code = motion_word;
-  // Axis words of the block.
-  bool tip_word = word['X' - 'A'] || word['Y' - 'A'] || word['Z' - 'A'];
-  bool rot_word = word['A' - 'A'] || word['B' - 'A'] || word['C' - 'A'];
-  bool ijk = word['I' - 'A'] || word['J' - 'A'] || word['K' - 'A'];
-  if (dwell) {
-    if (tip_word || rot_word) fail(1, "axis words with G4");
-    return;
-  }
-  const bool arc = motion_ == 20 || motion_ == 30;
-  if (ijk && !arc && !vector)
-    fail(static_cast<int>(b.find(word['I' - 'A'] ? 'I' : (word['J' - 'A'] ? 'J' : 'K'))->begin) + 1,
-         "I J K in a straight move: a tool-vector program? use --input-form vector");
-  if (arc && vector)
-    fail(1, "arcs in a tool-vector program are not supported; linearise them in CAM");
-  if (word['P' - 'A'] && !dwell)
-    fail(static_cast<int>(word['P' - 'A']->begin) + 1, "P words are supported with G4 only");
-  if (!tip_word && !rot_word && !(vector && ijk)) return;
-  // A move.
-  FiveAxisMove& m = out.move;
-  m.rapid = motion_ == 0;
-  m.tip.kind = nc::MotionKind::kLinear;
-  m.tip.start_mm = tip_mm_;
-  Eigen::Vector3d end = tip_mm_;
-  for (int a = 0; a < 3; ++a) {
-    if (const nc::Word* w = word[static_cast<size_t>("XYZ"[a] - 'A')])
-      end[a] = absolute_ ? w->value * unit_mm_ : end[a] + w->value * unit_mm_;
-  }
-  m.tip.end_mm = end;
-  m.q0 = q_;
-  for (int k = 0; k < machine_.axis_count(); ++k) {
-    const AxisName n = machine_.axis_order[static_cast<size_t>(k)];
-    if (!is_rotary(n)) continue;
-    if (const nc::Word* w = word[static_cast<size_t>(axis_char(n) - 'A')])
-      q_[k] = absolute_ ? w->value * kDegToRad : q_[k] + w->value * kDegToRad;
-  }
-  m.q1 = q_;
-  m.by_angles = !vector;
-  m.a0 = axis_;
-  if (vector && ijk) {
-    Eigen::Vector3d a = Eigen::Vector3d::Zero();
-    for (int c = 0; c < 3; ++c)
-      if (const nc::Word* w = word[static_cast<size_t>("IJK"[c] - 'A')]) a[c] = w->value;
-    if (a.norm() < 1e-9) fail(1, "the tool axis I J K is zero");
-    axis_ = a.normalized();
-  }
-  m.a1 = axis_;
-  if (arc) {
-    if (!tip_word) fail(1, "an arc without end point words");
-    m.tip.kind = nc::MotionKind::kArc;
-    m.tip.plane = plane_;
-    m.tip.clockwise = motion_ == 20;
-    static constexpr int kIn[3][2] = {{0, 1}, {2, 0}, {1, 2}};
-    Eigen::Vector3d c = tip_mm_;
-    for (int j = 0; j < 2; ++j) {
-      const int a = kIn[plane_][j];
-      const nc::Word* w = word[static_cast<size_t>("IJK"[a] - 'A')];
-      const double off = w ? w->value * unit_mm_ : 0.0;
-      c[a] = arc_absolute_ ? off : tip_mm_[a] + off;
-    }
-    m.tip.center_mm = c;
-    const int a0 = kIn[plane_][0], a1 = kIn[plane_][1];
-    const double r0 = std::hypot(tip_mm_[a0] - c[a0], tip_mm_[a1] - c[a1]);
-    const double r1 = std::hypot(end[a0] - c[a0], end[a1] - c[a1]);
-    if (r0 < 1e-9) fail(1, "arc centre at its start point");
-    if (std::abs(r0 - r1) > std::max(0.0127, 1e-3 * r0))
-      fail(1, fmt::format("arc radius to the end ({:.4f} mm) differs from the radius to the start "
-                          "({:.4f} mm)",
-                          r1, r0));
-  }
-  m.feed_mode = feed_mode_;
-  m.feed = feed_;
-  if (!m.rapid) {
-    if (feed_mode_ == 930 && !word['F' - 'A'])
-      fail(1, "a feed move under G93 (inverse time) needs F in its block");
-    if (feed_ < 0 || (feed_ == 0 && word['F' - 'A']))
-      fail(1, "the feed rate must be positive; correct F");
-    if (feed_ == 0) fail(1, "a feed move with no feed rate; add F");
-  }
-  tip_mm_ = end;
-  out.has_move = true;
 }
 
 }  // namespace volmap::post

@@ -63,8 +63,8 @@ struct FiveAxisMove {
   bool by_angles = true;
   AxisVector q0, q1;
   Eigen::Vector3d a0 = Eigen::Vector3d::UnitZ(), a1 = Eigen::Vector3d::UnitZ();
-  int feed_mode = 940;  ///< 930 inverse time, 940 per minute
-  double feed = 0.0;    ///< mm/min (940) or 1/min (930)
+  int feed_mode = nc::kG94UnitsPerMinute;  ///< G93 inverse time or G94 per minute (x10)
+  double feed = 0.0;                       ///< mm/min (G94) or 1/min (G93)
 };
 
 /// One line of the input.
@@ -105,7 +105,16 @@ class FiveAxisReader {
 
  private:
   bool read_raw(std::string& text);
+  // five_axis_input_gcode.cc: the G-code forms.
+  struct GcodeWords;
   void gcode_line(const std::string& text, FiveAxisLine& out);
+  /// Step 1: every word known, sorted; G codes of modes set the mode.
+  void read_gcode_words(const nc::Block& b, FiveAxisLine& out, GcodeWords& words);
+  void gcode_g_word(const nc::Word& w, int col, GcodeWords& words);
+  /// The move of a line, if it has one (out.move, out.has_move).
+  void gcode_move(const nc::Block& b, const GcodeWords& words, FiveAxisLine& out);
+  /// An arc's kind, plane, direction and centre into `tip`, its radii checked.
+  void arc_centre(const GcodeWords& words, const Eigen::Vector3d& end, nc::Motion& tip) const;
   void apt_line(std::string text, FiveAxisLine& out);
   [[noreturn]] void fail(int column, const std::string& msg) const;
 
@@ -121,7 +130,7 @@ class FiveAxisReader {
   // Modal state (program).
   double unit_mm_ = 1.0;
   bool absolute_ = true, arc_absolute_ = false;
-  int plane_ = 0, motion_ = 0, feed_mode_ = 940;
+  int plane_ = 0, motion_ = nc::kG0Rapid, feed_mode_ = nc::kG94UnitsPerMinute;
   double feed_ = 0.0;
   Eigen::Vector3d tip_mm_ = Eigen::Vector3d::Zero();
   AxisVector q_;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "gcode/nc_writer.h"
 #include "postproc/five_axis/five_axis_program_post.h"
@@ -29,7 +30,7 @@ std::string edited(const nc::Block& b, const nc::BlockEdit& e) {
 }  // namespace
 
 double FiveAxisPost::move_time_min(const FiveAxisMove& m) const {
-  if (m.feed_mode == 930) return 1.0 / m.feed;
+  if (m.feed_mode == nc::kG93InverseTime) return 1.0 / m.feed;
   const double L = nc::path_length_mm(m.tip);
   if (L > 1e-9) return L / m.feed;
   double deg = 0;
@@ -48,11 +49,12 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
     if (!s.empty() && spaces) s += ' ';
     s += lower ? static_cast<char>(std::tolower(static_cast<unsigned char>(letter))) : letter;
   };
-  const bool feed = motion == 10;
-  const int want_mode = o_.feed == FeedOutput::kInverseTime ? 930 : 940;
+  const bool feed = motion == nc::kG1Linear;
+  const int want_mode =
+      o_.feed == FeedOutput::kInverseTime ? nc::kG93InverseTime : nc::kG94UnitsPerMinute;
   if (feed && out_feed_mode_ != want_mode) {
     word('G');
-    s += want_mode == 930 ? "93" : "94";
+    s += want_mode == nc::kG93InverseTime ? "93" : "94";
     out_feed_mode_ = want_mode;
   }
   if (out_motion_ != motion) {
@@ -80,7 +82,7 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
     // number (10 000 in inverse time) and whatever small motion the
     // correction adds is slow.
     const double t = time_min > 0 ? time_min : 1e-4;
-    if (want_mode == 930) {
+    if (want_mode == nc::kG93InverseTime) {
       f = 1.0 / t;
     } else {
       const double len = std::sqrt(xyz2) > 1e-9 ? std::sqrt(xyz2) : std::sqrt(rot2);
@@ -105,13 +107,15 @@ void FiveAxisPost::write_line_without_move(const FiveAxisLine& l, bool lower) {
   bool g91 = false;
   for (size_t k = 0; k < l.block.words.size(); ++k) {
     const nc::Word& w = l.block.words[k];
-    if (w.letter == 'G' && (w.code10 == 930 || w.code10 == 940))
+    if (w.letter == 'G' && (w.code10 == nc::kG93InverseTime || w.code10 == nc::kG94UnitsPerMinute))
       edit.remove.push_back(static_cast<int>(k));
-    if (w.letter == 'G' && w.code10 == 910) {
+    if (w.letter == 'G' && w.code10 == nc::kG91Incremental) {
       edit.remove.push_back(static_cast<int>(k));
       g91 = true;
     }
-    if (w.letter == 'G' && (w.code10 == 0 || w.code10 == 10 || w.code10 == 20 || w.code10 == 30))
+    if (w.letter == 'G' &&
+        (w.code10 == nc::kG0Rapid || w.code10 == nc::kG1Linear || w.code10 == nc::kG2ArcClockwise ||
+         w.code10 == nc::kG3ArcCounterClockwise))
       out_motion_ = w.code10;
   }
   for (int k : l.strip) edit.remove.push_back(k);
@@ -171,10 +175,12 @@ void FiveAxisPost::write_first_piece(const FiveAxisLine& l, bool lower, const st
     const bool axis = L == 'X' || L == 'Y' || L == 'Z' || L == 'A' || L == 'B' || L == 'C' ||
                       L == 'I' || L == 'J' || L == 'K' || L == 'F';
     const bool modal =
-        L == 'G' && (w.code10 == 0 || w.code10 == 10 || w.code10 == 20 || w.code10 == 30 ||
-                     w.code10 == 930 || w.code10 == 940 || w.code10 == 910);
+        L == 'G' &&
+        (w.code10 == nc::kG0Rapid || w.code10 == nc::kG1Linear || w.code10 == nc::kG2ArcClockwise ||
+         w.code10 == nc::kG3ArcCounterClockwise || w.code10 == nc::kG93InverseTime ||
+         w.code10 == nc::kG94UnitsPerMinute || w.code10 == nc::kG91Incremental);
     if (axis || modal) edit.remove.push_back(static_cast<int>(k));
-    if (L == 'G' && w.code10 == 910) g91 = true;
+    if (L == 'G' && w.code10 == nc::kG91Incremental) g91 = true;
   }
   for (int k : l.strip) edit.remove.push_back(k);
   edit.insert = g91 ? (lower ? "g90 " : "G90 ") + words : words;
@@ -194,7 +200,7 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
   const FiveAxisMove& m = l.move;
   ++report_.moves;
   start_if_needed(m);
-  const int motion = m.rapid ? 0 : 10;
+  const int motion = m.rapid ? nc::kG0Rapid : nc::kG1Linear;
   const AxisVector from = c_;
   pieces_of_move(m);
   const double T = m.rapid ? 0.0 : move_time_min(m);
@@ -244,7 +250,7 @@ void FiveAxisPost::run(FiveAxisReader& reader) {
   if (reader.form() == InputForm::kApt) {
     emit("(volmap post: five-axis machine-axis program from APT/CLDATA " + file_ + ")");
     emit("G21 G90 G17 G40 G80 G94");
-    out_feed_mode_ = 940;
+    out_feed_mode_ = nc::kG94UnitsPerMinute;
   }
   FiveAxisLine l;
   while (reader.next(l)) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "gcode/nc_writer.h"
 #include "postproc/five_axis/five_axis_post.h"
@@ -171,10 +172,10 @@ class FiveAxisPost {
       m.q1[k] += turns_[k];
     }
   }
-  AxisVector c_;                 ///< commanded axes at the end of the last move
-  double residual_angle_ = 0.0;  ///< tool-axis error left there (rad)
-  int out_motion_ = -1;          ///< modal motion of the output (x10), -1 unknown
-  int out_feed_mode_ = 940;      ///< modal feed mode of the output
+  AxisVector c_;                                ///< commanded axes at the end of the last move
+  double residual_angle_ = 0.0;                 ///< tool-axis error left there (rad)
+  int out_motion_ = -1;                         ///< modal motion of the output (x10), -1 unknown
+  int out_feed_mode_ = nc::kG94UnitsPerMinute;  ///< modal feed mode of the output
   std::vector<Piece> pieces_;
   std::vector<std::pair<double, double>> stack_;  ///< segmentation work list (reused)
   std::vector<Piece> turn_;                       ///< pieces of one accepted step (reused)

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "postproc/three_axis/program_post.h"
 
@@ -61,7 +62,7 @@ bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Correc
                            bool spaces) {
   if (b.has('@') || b.has('^') || !emitted_known_) return false;
   for (const nc::Word& w : b.words)
-    if (w.letter == 'G' && w.code10 == 530) return false;
+    if (w.letter == 'G' && w.code10 == nc::kG53MachineCoordinates) return false;
   // What the pieces change: put back if the block is not kept.
   const LastCorrected last_was = last_, before_last_was = before_last_;
   const PostReport report_was = report_;
@@ -70,7 +71,7 @@ bool ProgramPost::keep_arc(const nc::Block& b, const nc::Motion& m, const Correc
   std::vector<KeptLine> lines;
   // Under G93 every line needs its own F (inverse time): one line only.
   if (!kept_arc_lines(m, c, lower, spaces, lines) ||
-      (interp_.state().feed_mode == 930 && lines.size() > 1)) {
+      (interp_.state().feed_mode == nc::kG93InverseTime && lines.size() > 1)) {
     last_ = last_was;
     before_last_ = before_last_was;
     report_ = report_was;
@@ -150,7 +151,8 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
       solve();
     }
   }
-  if (step && s.feed_mode == 930) return false;  // the step's own F: linearised instead
+  if (step && s.feed_mode == nc::kG93InverseTime)
+    return false;  // the step's own F: linearised instead
   nc::Motion cmd = piece;
   cmd.start_mm = c0;
   cmd.end_mm = c1;
@@ -247,7 +249,8 @@ void ProgramPost::write_kept_arc(const nc::Block& b, const nc::Motion& m, bool l
   for (size_t k = 0; k < b.words.size(); ++k) {
     const nc::Word& word = b.words[k];
     const char L = word.letter;
-    const bool motion = L == 'G' && (word.code10 == 20 || word.code10 == 30);
+    const bool motion = L == 'G' && (word.code10 == nc::kG2ArcClockwise ||
+                                     word.code10 == nc::kG3ArcCounterClockwise);
     if (L == 'X' || L == 'Y' || L == 'Z' || L == 'I' || L == 'J' || L == 'K' || L == 'R' ||
         L == 'P' || (motion && !lines[0].arc))
       edit.remove.push_back(static_cast<int>(k));

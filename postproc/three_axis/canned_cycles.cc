@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "gcode/g_codes.h"
 #include "postproc/three_axis/program_post.h"
 
 namespace volmap::post {
@@ -114,7 +115,8 @@ void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, co
                                bool lower, bool spaces, int dec) {
   const nc::State& s = interp_.state();
   const int code = s.motion;
-  if (code != 730 && code != 810 && code != 820 && code != 830 && code != 850 && code != 890)
+  if (code != nc::kG73PeckDrillChipBreak && code != nc::kG81Drill && code != nc::kG82DrillDwell &&
+      code != nc::kG83PeckDrill && code != nc::kG85Bore && code != nc::kG89BoreDwell)
     throw InputError(
         file_, current_line_,
         fmt::format(
@@ -122,7 +124,7 @@ void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, co
             "the spindle); post it without --expand-cycles (its hole bottom and R plane are "
             "corrected)",
             code / 10));
-  if (s.feed_mode == 930)
+  if (s.feed_mode == nc::kG93InverseTime)
     throw InputError(file_, current_line_,
                      "--expand-cycles under inverse time feed (G93): use G94 for the cycles");
   if (const nc::Word* p = b.find('P')) cycle_dwell_s_ = p->value;
@@ -139,17 +141,18 @@ void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, co
     if (at.z() < h.r_mm) rapid_to(Vector3d(at.x(), at.y(), h.r_mm));
     rapid_to(Vector3d(x, y, k == 0 ? at.z() : h.clear_mm));
     if (at.z() > h.r_mm) rapid_to(Vector3d(x, y, h.r_mm));
-    if (code == 730 || code == 830) expand_pecks(c, h, code, lower, spaces, at);
+    if (code == nc::kG73PeckDrillChipBreak || code == nc::kG83PeckDrill)
+      expand_pecks(c, h, code, lower, spaces, at);
     const Vector3d bottom(x, y, h.end_mm.z());
     expanded_feed(c, at, bottom, lower, spaces);
     at = bottom;
-    if (code == 820 || code == 890) {
+    if (code == nc::kG82DrillDwell || code == nc::kG89BoreDwell) {
       std::string dwell(1, lower ? 'p' : 'P');
       dwell += nc::format_number(cycle_dwell_s_, std::max(dec, 3));
       emit_move(4, lower, spaces, dwell);
       ++report_.lines_added;
     }
-    if (code == 850 || code == 890) {
+    if (code == nc::kG85Bore || code == nc::kG89BoreDwell) {
       const Vector3d r_level(x, y, h.r_mm);
       expanded_feed(c, at, r_level, lower, spaces);
       at = r_level;
@@ -187,7 +190,7 @@ void ProgramPost::expand_pecks(const Corrector& c, const nc::Motion& h, int code
     const Vector3d level(x, y, depth * unit + wo_z);
     expanded_feed(c, at, level, lower, spaces);
     at = level;
-    if (code == 830) rapid_to(Vector3d(x, y, h.r_mm));
+    if (code == nc::kG83PeckDrill) rapid_to(Vector3d(x, y, h.r_mm));
     rapid_to(Vector3d(x, y, (depth + back_off) * unit + wo_z));
   }
 }

@@ -2,6 +2,7 @@
 // (docs/post.md "Speed"); its output is byte for byte line()'s.
 #include <vector>
 
+#include "gcode/g_codes.h"
 #include "gcode/nc_block.h"
 #include "postproc/three_axis/program_post.h"
 
@@ -12,8 +13,9 @@ bool ProgramPost::plain_line(std::string_view text) {
   // The state the line needs (the rest is execute_linear_axes's): the same
   // tool as the last line, errors, the controller's position known, G90,
   // no inverse time.
-  if (!options_.shortcuts || !emitted_known_ || !st.absolute || st.feed_mode == 930 ||
-      !last_corrector_ || machine_.tool_length_mm + st.tool_length_mm != last_corrector_length_ ||
+  if (!options_.shortcuts || !emitted_known_ || !st.absolute ||
+      st.feed_mode == nc::kG93InverseTime || !last_corrector_ ||
+      machine_.tool_length_mm + st.tool_length_mm != last_corrector_length_ ||
       last_corrector_->zero())
     return false;
   nc::PlainAxisWords words;

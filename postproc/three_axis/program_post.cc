@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "maps/tables/volumetric_table.h"
 
@@ -164,7 +165,8 @@ std::size_t ProgramPost::feed_block_removals(const nc::Block& b, const BlockStyl
     for (char L : {'I', 'J', 'K', 'R', 'P'})
       if (const int i = word_index(b, L); i >= 0) remove[removed++] = i;
     for (size_t k = 0; k < b.words.size(); ++k)
-      if (b.words[k].letter == 'G' && (b.words[k].code10 == 20 || b.words[k].code10 == 30))
+      if (b.words[k].letter == 'G' && (b.words[k].code10 == nc::kG2ArcClockwise ||
+                                       b.words[k].code10 == nc::kG3ArcCounterClockwise))
         remove[removed++] = static_cast<int>(k);
   }
   if (g93)
@@ -209,7 +211,7 @@ void ProgramPost::feed_line(std::string_view text, const nc::Block& b, const nc:
     }
     return std::max(1e-12, share);
   };
-  const bool g93 = s.feed_mode == 930;
+  const bool g93 = s.feed_mode == nc::kG93InverseTime;
   std::array<int, 12> remove;
   const std::size_t removed = feed_block_removals(b, style, arc, g93, remove);
   const bool g53 = fx.g53;
