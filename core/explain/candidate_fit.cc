@@ -8,6 +8,8 @@
 #include <map>
 #include <numbers>
 
+#include "core/common/golden_section.h"
+
 namespace volmap::explanation {
 namespace {
 
@@ -15,34 +17,17 @@ using Evaluate = std::function<FittedCandidate(double theta)>;
 
 /// Golden-section search of f over [a, b] for `iterations` steps; returns
 /// the final bracket (a, b).
-std::pair<double, double> golden_section(double a, double b, int iterations,
-                                         const std::function<double(double)>& f) {
-  const double gr = (std::sqrt(5.0) - 1) / 2;
-  double x1 = b - gr * (b - a), x2 = a + gr * (b - a);
-  double f1 = f(x1), f2 = f(x2);
-  for (int it = 0; it < iterations; ++it) {
-    if (f1 < f2) {
-      b = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = b - gr * (b - a);
-      f1 = f(x1);
-    } else {
-      a = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = a + gr * (b - a);
-      f2 = f(x2);
-    }
-  }
-  return {a, b};
+std::pair<double, double> golden_section_bracket(double a, double b, int iterations,
+                                                 const std::function<double(double)>& f) {
+  const GoldenSectionResult r = golden_section(a, b, iterations, f);
+  return {r.lo, r.hi};
 }
 
 // A later step: the parameter was scanned before; refine around it
 // (+-15 %) with the current model.
 FittedCandidate fit_around_hint(const Evaluate& eval, double hint) {
-  const auto [a, b] = golden_section(std::log(hint / 1.15), std::log(hint * 1.15), 10,
-                                     [&](double x) { return eval(std::exp(x)).gain.rss; });
+  const auto [a, b] = golden_section_bracket(std::log(hint / 1.15), std::log(hint * 1.15), 10,
+                                             [&](double x) { return eval(std::exp(x)).gain.rss; });
   FittedCandidate best = eval(std::exp(0.5 * (a + b)));
   FittedCandidate at_hint = eval(hint);
   if (at_hint.gain.rss < best.gain.rss) best = std::move(at_hint);
@@ -102,7 +87,7 @@ std::optional<FittedCandidate> fit_cyclic(const Observations& obs, const LinearM
            hi = 1.0 / c.grid[i + 1 < c.grid.size() ? i + 1 : i];
     if (lo > hi) std::swap(lo, hi);
     const auto [a, b] =
-        golden_section(lo, hi, 18, [&](double x) { return eval(1.0 / x).gain.rss; });
+        golden_section_bracket(lo, hi, 18, [&](double x) { return eval(1.0 / x).gain.rss; });
     FittedCandidate r = eval(1.0 / (0.5 * (a + b)));
     if (r.gain.rss > f.gain.rss) r = f;
     if (!best || r.gain.rss < best->gain.rss) best = std::move(r);
@@ -125,9 +110,9 @@ std::optional<FittedCandidate> fit_on_grid(const Candidate& c, const Evaluate& e
   if (c.refine && c.grid.size() >= 3) {
     auto tr = [&](double x) { return c.log_refine ? std::log(x) : x; };
     auto inv = [&](double x) { return c.log_refine ? std::exp(x) : x; };
-    const auto [a, b] = golden_section(tr(c.grid[bi > 0 ? bi - 1 : bi]),
-                                       tr(c.grid[bi + 1 < c.grid.size() ? bi + 1 : bi]), 14,
-                                       [&](double x) { return eval(inv(x)).gain.rss; });
+    const auto [a, b] = golden_section_bracket(tr(c.grid[bi > 0 ? bi - 1 : bi]),
+                                               tr(c.grid[bi + 1 < c.grid.size() ? bi + 1 : bi]), 14,
+                                               [&](double x) { return eval(inv(x)).gain.rss; });
     FittedCandidate r = eval(inv(0.5 * (a + b)));
     if (r.gain.rss < best->gain.rss) best = std::move(r);
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/common/golden_section.h"
 #include "core/common/input_error.h"
 #include "gcode/nc_path.h"
 #include "postproc/five_axis/five_axis_post.h"
@@ -85,24 +86,8 @@ class Verifier {
       }
     }
     double lo = std::max(0, best - 1) / 16.0, hi = std::min(16, best + 1) / 16.0;
-    const double g = (std::sqrt(5.0) - 1) / 2;
-    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
-    for (int it = 0; it < 30; ++it) {
-      if (f1 < f2) {
-        hi = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = hi - g * (hi - lo);
-        f1 = f(x1);
-      } else {
-        lo = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = lo + g * (hi - lo);
-        f2 = f(x2);
-      }
-    }
-    return std::min({best_v, f1, f2});
+    const GoldenSectionResult r = golden_section(lo, hi, 30, f);
+    return std::min({best_v, r.f1, r.f2});
   }
 
   // Deviation of actual pose a from nominal move n: (mm, rad).

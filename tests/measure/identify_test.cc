@@ -364,5 +364,22 @@ TEST(IdentifyCli, SimulateThenIdentifyThroughFiles) {
   for (const std::string& f : {rec_path, out_path, bad, plan}) std::remove(f.c_str());
 }
 
+// A real one-axis laser recording (ISO 230-2, X only) says nothing about the
+// three-axis sample's squareness errors: identify reports all three as not
+// identifiable and estimates nothing. (It crashed here, SIGSEGV in Eigen's
+// eigensolver on the 0 x 0 normal matrix of the estimated parameters.)
+TEST(Identify, NothingIdentifiableIsReportedNotACrash) {
+  const Recordings rec =
+      load_recordings_csv(test::source_path("tests/data/ecmc-b02/x_recordings.csv"));
+  const IdentifyResult r = identify(machine("hsu-3axis"), rec, IdentifyOptions{});
+  EXPECT_EQ(r.rank, 0);
+  ASSERT_EQ(r.parameters.size(), 3u);
+  for (const IdentifiedParameter& p : r.parameters) {
+    EXPECT_FALSE(p.identifiable) << p.name;
+    EXPECT_EQ(p.estimate, 0.0) << p.name;
+  }
+  EXPECT_EQ(r.rms_after_um, r.rms_before_um);
+}
+
 }  // namespace
 }  // namespace volmap
