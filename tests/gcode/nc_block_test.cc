@@ -2,6 +2,8 @@
 // correctly rounded value, what it does not read refused; its fast paths
 // (spans and decimals of every form, numbers against std::from_chars, plain
 // axis words against the general lexer).
+#include "gcode/nc_block.h"
+
 #include <gtest/gtest.h>
 
 #include <charconv>
@@ -11,7 +13,6 @@
 #include <string>
 
 #include "core/common/input_error.h"
-#include "gcode/nc_block.h"
 #include "gcode/nc_writer.h"
 
 namespace volmap {

@@ -1,6 +1,8 @@
 // The NC interpreter: LinuxCNC's polar coordinates, the common block's
 // short path against the general steps, incremental canned cycles and the
 // cycle rules as rs274 reads them.
+#include "gcode/nc_interpreter.h"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -10,7 +12,6 @@
 
 #include "core/common/input_error.h"
 #include "gcode/nc_block.h"
-#include "gcode/nc_interpreter.h"
 
 namespace volmap {
 namespace {

@@ -1,5 +1,7 @@
 // The NC writer: deterministic numbers, the integer fast path of
 // format_number against fmt, and apply_edit_to against apply_edit.
+#include "gcode/nc_writer.h"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -9,7 +11,6 @@
 #include <string>
 
 #include "gcode/nc_block.h"
-#include "gcode/nc_writer.h"
 
 namespace volmap {
 namespace {
