@@ -8,6 +8,7 @@
 # volmap_options are the build's own and do not reach consumers.
 include_guard(GLOBAL)
 include(GNUInstallDirs)
+include(VolmapPch)
 
 set_property(GLOBAL PROPERTY VOLMAP_LIBRARIES "")
 
@@ -26,5 +27,6 @@ function(volmap_library name)
     target_link_libraries(${target} PUBLIC volmap_${dep})
   endforeach()
   target_link_libraries(${target} PUBLIC ${arg_EXTERNAL})
+  volmap_use_pch(${target})
   set_property(GLOBAL APPEND PROPERTY VOLMAP_LIBRARIES ${target})
 endfunction()

@@ -26,15 +26,12 @@
 #include <cassert>
 #include <charconv>
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
 
 #include "core/common/units.h"
 
 namespace volmap {
 namespace {
-
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 int sign_of(double v) { return (v > 0.0) - (v < 0.0); }
 

@@ -63,10 +63,12 @@ TEST(FuzzRegressions, EveryFoundInputIsHandled) {
 
 TEST(FuzzRegressions, EverySeedIsHandled) {
   const std::vector<Input> list = inputs("corpus");
-  for (const auto& [target, run] : targets())
+  for (const auto& entry : targets()) {
+    const std::string& target = entry.first;
     EXPECT_TRUE(
         std::any_of(list.begin(), list.end(), [&](const Input& i) { return i.target == target; }))
         << target << " has no seed";
+  }
   replay(list);
 }
 

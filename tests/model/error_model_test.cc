@@ -21,8 +21,6 @@
 namespace volmap {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
 using test::hsu3;
 using test::lei_hsu;
 using test::random_errors;
