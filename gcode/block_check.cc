@@ -73,7 +73,7 @@ bool BlockCheck::common_block() {
   if (!known_after && s_.motion != kG0Rapid)
     fail(nullptr,
          "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
-         "before the first cutting move, or give --initial-position");
+         "before the first cutting move, or give `initial_position`");
   if (s_.motion == kG1Linear && s_.feed <= 0.0 && s_.feed_mode != kG93InverseTime)
     fail(nullptr, "G1 with no feed rate; add an F word");
   straight_move(work_offset(), value, given, s_, effect_.motion);
@@ -84,7 +84,9 @@ bool BlockCheck::common_block() {
 void BlockCheck::general_steps() {
   // The general steps read every slot: those no word filled are null.
   words_.null_unfilled();
-  const bool any_axis = word('X') || word('Y') || word('Z') || polar;
+  // Rotary words are here only where the machine has the axis (step 1).
+  const bool any_axis =
+      word('X') || word('Y') || word('Z') || polar || word('A') || word('B') || word('C');
 
   // Step 3 and 4: execute in RS274NGC order.
   feed_tool_and_spindle();
@@ -115,7 +117,13 @@ void BlockCheck::general_steps() {
 }
 
 void BlockCheck::feed_tool_and_spindle() {
-  if (g[kFeedMode]) s_.feed_mode = g[kFeedMode]->code10;
+  if (g[kFeedMode]) {
+    // LinuxCNC (convert_feed_mode): G94 and G95 set the feed rate to zero,
+    // G93 keeps it (it needs F in every feed block); F in the block comes
+    // after.
+    s_.feed_mode = g[kFeedMode]->code10;
+    if (s_.feed_mode != kG93InverseTime) s_.feed = 0.0;
+  }
   if (const Word* f = word('F')) {
     if (f->value < 0) fail(f, "negative feed");
     s_.feed = f->value;
@@ -148,7 +156,7 @@ void BlockCheck::tool_length() {
     auto it = setup_.tool_length_mm.find(tool);
     if (it == setup_.tool_length_mm.end())
       fail(g[kToolLength], fmt::format("G43 uses tool {}, which the tool table does not list; "
-                                       "give its offset with --tool-table",
+                                       "give its offset with `tool_table`",
                                        tool));
     s_.tool_length_active = true;
     s_.tool_length_mm = it->second;
@@ -196,8 +204,11 @@ bool BlockCheck::motion_in_block(bool any_axis) {
   const bool full_circle =
       !any_axis && is_arc(arc_mode) &&
       (word(kOffsetLetters[arc_plane][0]) || word(kOffsetLetters[arc_plane][1]));
-  const bool motion_here =
-      (any_axis && !consumed_axes_) || full_circle || (g[kMotion] && is_cycle(g[kMotion]->code10));
+  // A tool-vector program turns the tool with I J K alone.
+  const bool tool_axis_only =
+      setup_.tool_axis_words && !is_arc(arc_mode) && (word('I') || word('J') || word('K'));
+  const bool motion_here = (any_axis && !consumed_axes_) || full_circle || tool_axis_only ||
+                           (g[kMotion] && is_cycle(g[kMotion]->code10));
   if (motion_here && g[kMotion] && g[kMotion]->code10 == kG80CycleCancel)
     fail(g[kMotion], "axis words with G80; remove them or use G0/G1");
   if (g53_ && motion_here && s_.motion != kG0Rapid && s_.motion != kG1Linear)
@@ -248,7 +259,10 @@ void BlockCheck::unused_words(bool motion_here) {
                           users));
   };
   if (m_reads_words) return;
-  for (char L : {'I', 'J', 'K'}) unused(L, arc, "G2 or G3");
+  const bool straight = motion_to_be == kG0Rapid || motion_to_be == kG1Linear;
+  for (char L : {'I', 'J', 'K'})
+    unused(L, arc || (setup_.tool_axis_words && straight),
+           setup_.tool_axis_words ? "G0, G1 (tool axis), G2 or G3" : "G2 or G3");
   unused('R', arc || cycle, "G2, G3 or canned cycle");
   unused('L', cycle, "canned cycle");
   unused('P',

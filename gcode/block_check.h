@@ -55,6 +55,10 @@ class BlockCheck {
   void polar_target(double at_x, double at_y, bool xy_known, Eigen::Vector3d& target,
                     std::array<bool, 3>& given) const;
   void arc(Motion& mo, const Eigen::Vector3d& target, const std::array<bool, 3>& given);
+  /// The rotary axes' end (A B C words) of a motion of `kind`.
+  void rotary_targets(MotionKind kind);
+  /// A tool-vector program's new tool axis (I J K of a straight move).
+  void straight_tool_axis();
 
   // canned_cycles.cc
   /// The checks of a cycle block and its modal R Z Q; returns the repeats (L).

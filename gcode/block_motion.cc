@@ -68,7 +68,7 @@ void BlockCheck::motion(int motion_before) {
   if (!known_after && mode != kG0Rapid)
     fail(nullptr,
          "a feed move from an unknown position: command X, Y and Z with a rapid (G0) "
-         "before the first cutting move, or give --initial-position");
+         "before the first cutting move, or give `initial_position`");
   if (mode == kG0Rapid || mode == kG1Linear) {
     mo.kind = mode == kG0Rapid ? MotionKind::kRapid : MotionKind::kLinear;
     if (mode == kG1Linear && s_.feed <= 0.0 && s_.feed_mode != kG93InverseTime)
@@ -81,6 +81,8 @@ void BlockCheck::motion(int motion_before) {
   } else {
     fail(nullptr, "axis words without a motion mode; add G0 or G1");
   }
+  if (mo.kind == MotionKind::kRapid || mo.kind == MotionKind::kLinear) straight_tool_axis();
+  rotary_targets(mo.kind);
   effect_.has_motion = true;
   s_.position_mm = target;
   // An incremental word moves from where the axis is: it makes an unknown
@@ -89,6 +91,33 @@ void BlockCheck::motion(int motion_before) {
     if ((given[static_cast<size_t>(a)] && s_.absolute) || mo.kind == MotionKind::kCycle)
       s_.axis_known[static_cast<size_t>(a)] = true;
   s_.position_known = s_.axis_known[0] && s_.axis_known[1] && s_.axis_known[2];
+}
+
+void BlockCheck::rotary_targets(MotionKind kind) {
+  for (int r = 0; r < 3; ++r) {
+    const Word* w = word("ABC"[r]);
+    if (!w) continue;
+    if (kind == MotionKind::kCycle)
+      fail(w, fmt::format("rotary axis word {} in a canned cycle block; move the rotary axes in "
+                          "a block of their own",
+                          w->letter));
+    double& q = s_.rotary_rad[static_cast<size_t>(r)];
+    q = s_.absolute ? w->value * units::kRadPerDeg : q + w->value * units::kRadPerDeg;
+  }
+}
+
+void BlockCheck::straight_tool_axis() {
+  if (!setup_.tool_axis_words) return;
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  bool given = false;
+  for (int c = 0; c < 3; ++c)
+    if (const Word* w = word("IJK"[c])) {
+      a[c] = w->value;
+      given = true;
+    }
+  if (!given) return;
+  if (a.norm() < 1e-9) fail(nullptr, "the tool axis I J K is zero");
+  s_.tool_axis = a.normalized();
 }
 
 void BlockCheck::polar_target(double at_x, double at_y, bool xy_known, Eigen::Vector3d& target,
@@ -103,7 +132,7 @@ void BlockCheck::polar_target(double at_x, double at_y, bool xy_known, Eigen::Ve
   if (needs_current && !xy_known)
     fail(w,
          "polar coordinates from an unknown position: command X and Y first (or give "
-         "--initial-position)");
+         "`initial_position`)");
   double px = at_x, py = at_y;
   if (s_.absolute) {
     if (polar_radius && !polar_angle && px == 0 && py == 0)

@@ -9,7 +9,8 @@ namespace {
 
 // Letters whose words need nothing but "not twice in a block": all of A-Z
 // except G and M (modal groups), N (may repeat), the axes the three-axis
-// post refuses (A B C U V W) and D E (refused); '@' '^' are handled apart.
+// post refuses (A B C U V W: rotary words only where the machine has the
+// axis) and D E (refused); '@' '^' are handled apart.
 constexpr std::array<bool, 256> kPlainLetter = [] {
   std::array<bool, 256> t{};
   for (char c = 'A'; c <= 'Z'; ++c) t[static_cast<unsigned char>(c)] = true;
@@ -49,7 +50,8 @@ void collect_m_word(const Block& b, const std::string& file, const Word& w, Bloc
 }
 
 // A word of another letter than the plain ones, G and M.
-void collect_other_word(const Block& b, const std::string& file, const Word& w, BlockWords& out) {
+void collect_other_word(const Block& b, const std::string& file, const std::string& rotary_axes,
+                        const Word& w, BlockWords& out) {
   if (w.letter == '@' || w.letter == '^') {
     const Word*& slot = w.letter == '@' ? out.polar_radius : out.polar_angle;
     if (slot)
@@ -58,11 +60,14 @@ void collect_other_word(const Block& b, const std::string& file, const Word& w, 
     return;
   }
   const char L = w.letter;
-  if (L == 'A' || L == 'B' || L == 'C' || L == 'U' || L == 'V' || L == 'W')
+  const bool rotary = L == 'A' || L == 'B' || L == 'C';
+  if ((rotary || L == 'U' || L == 'V' || L == 'W') && rotary_axes.empty())
     refuse_block(file, b, &w,
                  fmt::format("axis word {} is not supported by the three-axis post-processor; "
                              "use a five-axis machine definition",
                              L));
+  if ((rotary && rotary_axes.find(L) == std::string::npos) || L == 'U' || L == 'V' || L == 'W')
+    refuse_block(file, b, &w, fmt::format("the machine has no axis {}", L));
   if (L == 'D' || L == 'E')
     refuse_block(file, b, &w,
                  fmt::format("word {} is not supported (cutter compensation, lathe)", L));
@@ -87,7 +92,8 @@ void BlockWords::null_unfilled() {
     if (!(m_mask & (1u << k))) m[k] = nullptr;
 }
 
-void collect_block_words(const Block& b, const std::string& file, BlockWords& out) {
+void collect_block_words(const Block& b, const std::string& file, const std::string& rotary_axes,
+                         BlockWords& out) {
   out.polar_radius = out.polar_angle = nullptr;
   out.g_mask = out.m_mask = 0;
   out.letter_mask = 0;
@@ -106,7 +112,7 @@ void collect_block_words(const Block& b, const std::string& file, BlockWords& ou
     else if (w.letter == 'M')
       collect_m_word(b, file, w, out);
     else
-      collect_other_word(b, file, w, out);
+      collect_other_word(b, file, rotary_axes, w, out);
   }
 }
 

@@ -38,7 +38,9 @@ struct BlockWords {
 
 /// Sorts the words of `b` into `out` (steps 1 and 2). Throws InputError
 /// naming `file`, the block's line and the word's column.
-void collect_block_words(const Block& b, const std::string& file, BlockWords& out);
+/// `rotary_axes`: the rotary axis letters that are words (ProgramSetup).
+void collect_block_words(const Block& b, const std::string& file, const std::string& rotary_axes,
+                         BlockWords& out);
 
 /// Throws the InputError of a refused block: file:line:column of word `w`
 /// (column 0 without one) and `msg`.

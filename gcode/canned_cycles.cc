@@ -96,7 +96,7 @@ Eigen::Vector3d BlockCheck::cycle(Motion& mo, int motion_before, double at_x, do
   if (polar && !xy_known)
     fail(polar_radius ? polar_radius : polar_angle,
          "polar coordinates from an unknown position: command X and Y first (or give "
-         "--initial-position)");
+         "`initial_position`)");
   mo.r_mm = r_mm;
   mo.clear_mm = s_.g98 ? std::max(initial, r_mm) : r_mm;
   Eigen::Vector3d at = s_.position_mm;

@@ -93,10 +93,10 @@ const char* g_refusal(int code10) {
     case kG92_3AxisOffsetRestore:
     case kG52LocalOffset:
       return "G92/G52 coordinate offsets are not supported; use G54-G59.3 work offsets "
-             "(--work-offset or --var-file)";
+             "(`work_offset` or `var_file`)";
     case kG10SetOffsets:
       return "G10 (setting offsets or tools from the program) is not supported; give them "
-             "with --var-file / --tool-table";
+             "with `var_file` / `tool_table`";
     case kG38_2Probe:
     case kG38_3Probe:
     case kG38_4Probe:

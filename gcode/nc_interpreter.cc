@@ -12,6 +12,8 @@ Interpreter::Interpreter(ProgramSetup setup, std::string file)
     s_.position_known = true;
     s_.axis_known = {true, true, true};
   }
+  s_.rotary_rad = setup_.initial_rotary_rad;
+  s_.tool_axis = setup_.initial_tool_axis;
 }
 
 bool Interpreter::execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion) {
@@ -37,7 +39,7 @@ State Interpreter::check(const Block& b, BlockEffect& effect) const {
   if (b.percent || b.words.empty()) return after;
   if (s_.ended) return after;  // after M2/M30 nothing executes (LinuxCNC ignores the rest)
   BlockWords words;
-  collect_block_words(b, file_, words);                      // steps 1 and 2
+  collect_block_words(b, file_, setup_.rotary_axes, words);  // steps 1 and 2
   BlockCheck(setup_, file_, b, words, after, effect).run();  // step 3
   return after;
 }

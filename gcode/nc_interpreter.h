@@ -92,6 +92,12 @@ struct State {
   /// Spindle turning (M3 or M4 in effect; M5, M19 and the program's end
   /// stop it): LinuxCNC's G86 needs it ("Spindle not turning in g86").
   bool spindle_turning = false;
+  /// Rotary axes A B C, rad (ProgramSetup::rotary_axes: only those the
+  /// machine has move).
+  std::array<double, 3> rotary_rad{};
+  /// The tool axis of a tool-vector program (ProgramSetup::tool_axis_words),
+  /// unit, in program coordinates.
+  Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();
 
   friend bool operator==(const State&, const State&) = default;
 };

@@ -6,6 +6,7 @@
 #include <array>
 #include <map>
 #include <optional>
+#include <string>
 
 namespace volmap::nc {
 
@@ -31,6 +32,20 @@ struct ProgramSetup {
   /// program without Z) be corrected. Unknown by default: then the first
   /// feed move must come after a rapid that sets X, Y and Z.
   std::optional<Eigen::Vector3d> initial_position_mm;
+
+  // Five-axis programs (the five-axis post reads them through this same
+  // interpreter).
+  /// The rotary axis words a program may carry ("AC" on an X'Y'ZA'C'
+  /// machine): degrees, absolute under G90 and incremental under G91 like X
+  /// Y Z, without work offsets, moving linearly with the straight move or
+  /// arc of their block. Empty (the three-axis post): A B C are refused.
+  std::string rotary_axes;
+  /// I J K of a straight move (G0 G1) give the tool axis (tool-vector
+  /// programs), not an arc centre; unit or not (normalised).
+  bool tool_axis_words = false;
+  /// Rotary axes A B C (rad) and tool axis when the program starts.
+  std::array<double, 3> initial_rotary_rad{};
+  Eigen::Vector3d initial_tool_axis = Eigen::Vector3d::UnitZ();
 };
 
 }  // namespace volmap::nc

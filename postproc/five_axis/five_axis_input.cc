@@ -97,24 +97,61 @@ InputForm detect_input_form(const std::vector<std::string>& lines) {
   return InputForm::kTcp;
 }
 
-FiveAxisReader::FiveAxisReader(std::istream& in, std::string file, const Machine& machine,
-                               InputForm form, const InitialPose& initial)
-    : in_(in), file_(std::move(file)), machine_(machine), form_(form) {
-  q_ =
+namespace {
+
+// kAuto: the form of the first 2000 lines, which stay in `buffered`.
+InputForm resolve_form(std::istream& in, InputForm form, std::deque<std::string>& buffered) {
+  if (form != InputForm::kAuto) return form;
+  std::vector<std::string> first;
+  std::string l;
+  while (first.size() < 2000 && std::getline(in, l)) {
+    first.push_back(l);
+    buffered.push_back(l + (in.eof() ? "" : "\n"));
+  }
+  return detect_input_form(first);
+}
+
+// The rotary angles of `initial` (rad, AxisVector order), zero where the
+// pose gives none and for the linear axes.
+AxisVector initial_angles(const Machine& machine, const InitialPose& initial) {
+  AxisVector q =
       initial.q.size() == machine.axis_count() ? initial.q : AxisVector::Zero(machine.axis_count());
   for (int k = 0; k < machine.axis_count(); ++k)
-    if (!is_rotary(machine.axis_order[static_cast<size_t>(k)])) q_[k] = 0.0;
-  tip_mm_ = initial.tip_mm;
-  axis_ = initial.axis.normalized();
-  if (form_ == InputForm::kAuto) {
-    std::vector<std::string> first;
-    std::string l;
-    while (first.size() < 2000 && std::getline(in_, l)) {
-      first.push_back(l);
-      buffered_.push_back(l + (in_.eof() ? "" : "\n"));
-    }
-    form_ = detect_input_form(first);
+    if (!is_rotary(machine.axis_order[static_cast<size_t>(k)])) q[k] = 0.0;
+  return q;
+}
+
+// The interpreter's setup for the G-code forms: program coordinates (no
+// work offsets), the machine's rotary axis words, I J K as the tool axis in
+// tool-vector programs, the tool where `initial` puts it.
+nc::ProgramSetup gcode_setup(const Machine& machine, InputForm form, const InitialPose& initial) {
+  nc::ProgramSetup setup;
+  setup.initial_position_mm = initial.tip_mm;
+  const AxisVector q = initial_angles(machine, initial);
+  for (int k = 0; k < machine.axis_count(); ++k) {
+    const AxisName n = machine.axis_order[static_cast<size_t>(k)];
+    if (!is_rotary(n)) continue;
+    const char letter = axis_char(n);
+    setup.rotary_axes += letter;
+    setup.initial_rotary_rad[static_cast<size_t>(letter - 'A')] = q[k];
   }
+  setup.tool_axis_words = form == InputForm::kToolVector;
+  setup.initial_tool_axis = initial.axis.normalized();
+  return setup;
+}
+
+}  // namespace
+
+FiveAxisReader::FiveAxisReader(std::istream& in, std::string file, const Machine& machine,
+                               InputForm form, const InitialPose& initial)
+    : in_(in),
+      file_(std::move(file)),
+      machine_(machine),
+      form_(resolve_form(in, form, buffered_)),
+      interp_(gcode_setup(machine, form_, initial), file_) {
+  apt_.q = initial_angles(machine, initial);
+  apt_.tip_mm = initial.tip_mm;
+  apt_.axis = initial.axis.normalized();
 }
 
 bool FiveAxisReader::read_raw(std::string& text) {
@@ -157,7 +194,7 @@ bool FiveAxisReader::next(FiveAxisLine& out) {
   } else {
     gcode_line(text, out);
   }
-  out.unit_mm = unit_mm_;
+  out.unit_mm = form_ == InputForm::kApt ? apt_.unit_mm : interp_.state().unit_mm;
   return true;
 }
 
@@ -194,29 +231,29 @@ void FiveAxisReader::apt_line(std::string stmt, FiveAxisLine& out) {
     for (size_t k = 0; k < args.size(); ++k)
       if (!number(args[k], v[k])) fail(1, fmt::format("GOTO: '{}' is not a number", args[k]));
     FiveAxisMove& m = out.move;
-    m.rapid = apt_rapid_;
-    apt_rapid_ = false;
+    m.rapid = apt_.rapid;
+    apt_.rapid = false;
     m.by_angles = false;
     m.tip.kind = nc::MotionKind::kLinear;
-    m.tip.start_mm = tip_mm_;
-    m.tip.end_mm = Eigen::Vector3d(v[0], v[1], v[2]) * unit_mm_;
-    m.a0 = axis_;
+    m.tip.start_mm = apt_.tip_mm;
+    m.tip.end_mm = Eigen::Vector3d(v[0], v[1], v[2]) * apt_.unit_mm;
+    m.a0 = apt_.axis;
     if (args.size() == 6) {
       const Eigen::Vector3d a(v[3], v[4], v[5]);
       if (a.norm() < 1e-9) fail(1, "GOTO: the tool axis i,j,k is zero");
-      axis_ = a.normalized();
+      apt_.axis = a.normalized();
     }
-    m.a1 = axis_;
-    m.q0 = m.q1 = q_;
+    m.a1 = apt_.axis;
+    m.q0 = m.q1 = apt_.q;
     m.feed_mode = nc::kG94UnitsPerMinute;
-    m.feed = feed_;
-    if (!m.rapid && feed_ <= 0) fail(1, "GOTO feed move before any FEDRAT; add FEDRAT/");
-    tip_mm_ = m.tip.end_mm;
+    m.feed = apt_.feed;
+    if (!m.rapid && apt_.feed <= 0) fail(1, "GOTO feed move before any FEDRAT; add FEDRAT/");
+    apt_.tip_mm = m.tip.end_mm;
     out.has_move = true;
     return;
   }
   if (key == "RAPID") {
-    apt_rapid_ = true;
+    apt_.rapid = true;
     out.text = "(APT: RAPID)";
     return;
   }
@@ -233,15 +270,15 @@ void FiveAxisReader::apt_line(std::string stmt, FiveAxisLine& out) {
         fail(1, fmt::format("FEDRAT: '{}' is not understood", a));
     }
     if (!got || f <= 0) fail(1, "FEDRAT needs a positive feed");
-    feed_ = f * unit_mm_;
+    apt_.feed = f * apt_.unit_mm;
     out.text = "(APT: " + comment_text(stmt) + ")";
     return;
   }
   if (key == "UNITS") {
     if (!args.empty() && (args[0] == "INCHES" || args[0] == "INCH"))
-      unit_mm_ = 25.4;
+      apt_.unit_mm = 25.4;
     else if (!args.empty() && args[0] == "MM")
-      unit_mm_ = 1.0;
+      apt_.unit_mm = 1.0;
     else
       fail(1, "UNITS/ takes MM or INCHES");
     out.text = "(APT: " + comment_text(stmt) + ")";

@@ -20,11 +20,17 @@
 // is Machine::workpiece_origin_mm, which --part-origin sets), mm; angles rad;
 // feeds mm/min (G94) or 1/min (G93). Program units are converted here.
 //
-// Accepted G codes: G0 G1 G2 G3 (I J K centre, XY/ZX/YZ planes), G17-G19,
-// G20 G21, G90 G91, G90.1 G91.1, G93 G94, G40 G49 G80, G54, G61 G61.1 G64,
-// G4. Refused with file:line:column: everything else (G43 tool length: the
-// machine file's tool is the one; other work offsets: one part origin).
-// M428/M429/M430 (LinuxCNC's kinematics switches) are marked for stripping.
+// The G-code forms run on gcode's interpreter (nc::Interpreter, the three-axis
+// post's), with the machine's rotary axis words and, in kToolVector, I J K
+// of straight moves as the tool axis: its modal state, checks and messages
+// are the three-axis post's. What the five-axis post does not take is
+// refused first, with file:line:column: of the G codes it accepts G0 G1 G2
+// G3 (I J K centre, XY/ZX/YZ planes), G17-G19, G20 G21, G90 G91, G90.1
+// G91.1, G93 G94, G40 G49 G80, G54, G61 G61.1 G64 and G4, and no other (G43
+// tool length: the machine file's tool is the one; other work offsets: one
+// part origin); of the words N S T F P (with G4) X Y Z I J K and the
+// machine's rotary axes. M428/M429/M430 (LinuxCNC's kinematics switches)
+// are marked for stripping and not interpreted.
 #pragma once
 
 #include <Eigen/Core>
@@ -108,34 +114,40 @@ class FiveAxisReader {
   // five_axis_input_gcode.cc: the G-code forms.
   struct GcodeWords;
   void gcode_line(const std::string& text, FiveAxisLine& out);
-  /// Step 1: every word known, sorted; G codes of modes set the mode.
-  void read_gcode_words(const nc::Block& b, FiveAxisLine& out, GcodeWords& words);
-  void gcode_g_word(const nc::Word& w, int col, GcodeWords& words);
-  /// The move of a line, if it has one (out.move, out.has_move).
-  void gcode_move(const nc::Block& b, const GcodeWords& words, FiveAxisLine& out);
-  /// An arc's kind, plane, direction and centre into `tip`, its radii checked.
-  void arc_centre(const GcodeWords& words, const Eigen::Vector3d& end, nc::Motion& tip) const;
+  /// What the five-axis post takes of a line, before the interpreter runs
+  /// it: every word, sorted; the words to strip.
+  void read_gcode_words(const nc::Block& b, FiveAxisLine& out, GcodeWords& words) const;
+  void gcode_g_word(const nc::Word& w, int col, GcodeWords& words) const;
+  /// The refusals of the five-axis post that depend on the block's motion.
+  void check_gcode_motion(const nc::Block& b, const GcodeWords& words) const;
+  /// The move of an interpreted line (out.move, out.has_move) from the
+  /// state before it and what it did.
+  void gcode_move(const GcodeWords& words, const nc::State& before, const nc::BlockEffect& effect,
+                  FiveAxisLine& out) const;
   void apt_line(std::string text, FiveAxisLine& out);
   [[noreturn]] void fail(int column, const std::string& msg) const;
 
   std::istream& in_;
   std::string file_;
   const Machine& machine_;
+  std::deque<std::string> buffered_;  ///< lines read to detect the form
   InputForm form_;
-  std::deque<std::string> buffered_;
   int line_ = 0;
   bool newline_ = true;
   std::string line_ending_ = "\n";
 
-  // Modal state (program).
-  double unit_mm_ = 1.0;
-  bool absolute_ = true, arc_absolute_ = false;
-  int plane_ = 0, motion_ = nc::kG0Rapid, feed_mode_ = nc::kG94UnitsPerMinute;
-  double feed_ = 0.0;
-  Eigen::Vector3d tip_mm_ = Eigen::Vector3d::Zero();
-  AxisVector q_;
-  Eigen::Vector3d axis_ = Eigen::Vector3d::UnitZ();
-  bool apt_rapid_ = false;
+  // The G-code forms' modal state: the interpreter's (program coordinates,
+  // no work offsets).
+  nc::Interpreter interp_;
+  // The APT form's.
+  struct AptState {
+    double unit_mm = 1.0;
+    double feed = 0.0;  ///< mm/min
+    Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();
+    AxisVector q;
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+    bool rapid = false;  ///< RAPID: the next GOTO only
+  } apt_;
 };
 
 }  // namespace volmap::post

@@ -33,7 +33,7 @@ bool replace_siemens_vector(std::string& text) {
 
 }  // namespace
 
-/// The words of a G-code line (step 1 of gcode_line).
+/// The words of a G-code line (read_gcode_words).
 struct FiveAxisReader::GcodeWords {
   int motion_word = -1;
   bool g93 = false, g94 = false, dwell = false;
@@ -51,21 +51,25 @@ void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
   GcodeWords words;
   read_gcode_words(b, out, words);
   if (words.g93 && words.g94) fail(1, "G93 and G94 in one block");
-  if (words.g93) feed_mode_ = nc::kG93InverseTime;
-  if (words.g94) feed_mode_ = nc::kG94UnitsPerMinute;
-  if (words['F']) {
-    const double f = words['F']->value;
-    feed_ = feed_mode_ == nc::kG93InverseTime ? f : f * unit_mm_;
-  } else if (words.g93 || words.g94) {
-    feed_ = 0.0;  // a new feed mode needs a new F (RS274NGC)
+  if (const nc::Word* f = words['F']; f && f->value <= 0)
+    fail(static_cast<int>(f->begin) + 1, "the feed rate must be positive; correct F");
+  check_gcode_motion(b, words);
+  // The interpreter runs the block without the kinematics switches.
+  nc::Block stripped;
+  if (!out.strip.empty()) {
+    stripped = b;
+    for (auto k = out.strip.rbegin(); k != out.strip.rend(); ++k)
+      stripped.words.erase(stripped.words.begin() + *k);
   }
-  if (words.motion_word >= 0) motion_ = words.motion_word;
+  const nc::State before = interp_.state();
+  nc::BlockEffect effect;
+  interp_.execute(out.strip.empty() ? b : stripped, effect);
   out.motion_code = words.motion_word;
-  gcode_move(b, words, out);
+  gcode_move(words, before, effect, out);
 }
 
-void FiveAxisReader::read_gcode_words(const nc::Block& b, FiveAxisLine& out, GcodeWords& words) {
-  // Step 1: every word known; modal words first.
+void FiveAxisReader::read_gcode_words(const nc::Block& b, FiveAxisLine& out,
+                                      GcodeWords& words) const {
   const bool vector = form_ == InputForm::kToolVector;
   for (size_t k = 0; k < b.words.size(); ++k) {
     const nc::Word& w = b.words[k];
@@ -95,7 +99,7 @@ void FiveAxisReader::read_gcode_words(const nc::Block& b, FiveAxisLine& out, Gco
       if (vector)
         fail(col,
              fmt::format("rotary word {} in a tool-vector program; give the tool axis as I J K "
-                         "(or use --input-form tcp)",
+                         "(or use `input_form` tcp)",
                          L));
       if (!axis || !machine_.index_of(*axis))
         fail(col, fmt::format("the machine has no axis {}", L));
@@ -111,7 +115,7 @@ void FiveAxisReader::read_gcode_words(const nc::Block& b, FiveAxisLine& out, Gco
   }
 }
 
-void FiveAxisReader::gcode_g_word(const nc::Word& w, int col, GcodeWords& words) {
+void FiveAxisReader::gcode_g_word(const nc::Word& w, int col, GcodeWords& words) const {
   switch (w.code10) {
     case nc::kG0Rapid:
     case nc::kG1Linear:
@@ -123,39 +127,21 @@ void FiveAxisReader::gcode_g_word(const nc::Word& w, int col, GcodeWords& words)
     case nc::kG4Dwell:
       words.dwell = true;
       return;
-    case nc::kG17PlaneXY:
-      plane_ = 0;
-      return;
-    case nc::kG18PlaneZX:
-      plane_ = 1;
-      return;
-    case nc::kG19PlaneYZ:
-      plane_ = 2;
-      return;
-    case nc::kG20Inch:
-      unit_mm_ = 25.4;
-      return;
-    case nc::kG21Millimetre:
-      unit_mm_ = 1.0;
-      return;
-    case nc::kG90Absolute:
-      absolute_ = true;
-      return;
-    case nc::kG91Incremental:
-      absolute_ = false;
-      return;
-    case nc::kG90_1ArcCentreAbsolute:
-      arc_absolute_ = true;
-      return;
-    case nc::kG91_1ArcCentreIncremental:
-      arc_absolute_ = false;
-      return;
     case nc::kG93InverseTime:
       words.g93 = true;
       return;
     case nc::kG94UnitsPerMinute:
       words.g94 = true;
       return;
+    case nc::kG17PlaneXY:
+    case nc::kG18PlaneZX:
+    case nc::kG19PlaneYZ:
+    case nc::kG20Inch:
+    case nc::kG21Millimetre:
+    case nc::kG90Absolute:
+    case nc::kG91Incremental:
+    case nc::kG90_1ArcCentreAbsolute:
+    case nc::kG91_1ArcCentreIncremental:
     case nc::kG40CutterCompOff:
     case nc::kG49ToolLengthCancel:
     case nc::kG80CycleCancel:
@@ -163,7 +149,7 @@ void FiveAxisReader::gcode_g_word(const nc::Word& w, int col, GcodeWords& words)
     case nc::kG61ExactPath:
     case nc::kG61_1ExactStop:
     case nc::kG64Blending:
-      return;
+      return;  // the interpreter's
     case nc::kG43ToolLength:
     case nc::kG43_1DynamicToolLength:
       fail(col,
@@ -173,100 +159,59 @@ void FiveAxisReader::gcode_g_word(const nc::Word& w, int col, GcodeWords& words)
       if (w.code10 >= nc::kG55WorkOffset2 && w.code10 <= nc::kG59_3WorkOffset9)
         fail(col,
              "only G54 is accepted: the program origin is one point on the table "
-             "(--part-origin); post each work offset's part separately");
+             "(`part_origin`); post each work offset's part separately");
       fail(col,
            fmt::format("G{} is not supported by the five-axis post; output it without from CAM",
                        nc::format_number(w.value, 4)));
   }
 }
 
-void FiveAxisReader::gcode_move(const nc::Block& b, const GcodeWords& words, FiveAxisLine& out) {
+void FiveAxisReader::check_gcode_motion(const nc::Block& b, const GcodeWords& words) const {
   const bool vector = form_ == InputForm::kToolVector;
-  // Axis words of the block.
-  bool tip_word = words['X'] || words['Y'] || words['Z'];
-  bool rot_word = words['A'] || words['B'] || words['C'];
-  bool ijk = words['I'] || words['J'] || words['K'];
+  const bool tip_word = words['X'] || words['Y'] || words['Z'];
+  const bool rot_word = words['A'] || words['B'] || words['C'];
+  const bool ijk = words['I'] || words['J'] || words['K'];
   if (words.dwell) {
     if (tip_word || rot_word) fail(1, "axis words with G4");
     return;
   }
-  const bool arc = motion_ == nc::kG2ArcClockwise || motion_ == nc::kG3ArcCounterClockwise;
+  const int motion = words.motion_word >= 0 ? words.motion_word : interp_.state().motion;
+  const bool arc = motion == nc::kG2ArcClockwise || motion == nc::kG3ArcCounterClockwise;
   if (ijk && !arc && !vector)
     fail(static_cast<int>(b.find(words['I'] ? 'I' : (words['J'] ? 'J' : 'K'))->begin) + 1,
-         "I J K in a straight move: a tool-vector program? use --input-form vector");
-  if (arc && vector)
+         "I J K in a straight move: a tool-vector program? use `input_form` vector");
+  if (arc && vector && (tip_word || ijk))
     fail(1, "arcs in a tool-vector program are not supported; linearise them in CAM");
-  if (words['P'] && !words.dwell)
+  if (words['P'])
     fail(static_cast<int>(words['P']->begin) + 1, "P words are supported with G4 only");
-  if (!tip_word && !rot_word && !(vector && ijk)) return;
-  // A move.
+  if (arc && !tip_word && (rot_word || ijk)) fail(1, "an arc without end point words");
+}
+
+void FiveAxisReader::gcode_move(const GcodeWords& words, const nc::State& before,
+                                const nc::BlockEffect& effect, FiveAxisLine& out) const {
+  if (!effect.has_motion) return;
+  const nc::State& after = interp_.state();
   FiveAxisMove& m = out.move;
-  m.rapid = motion_ == nc::kG0Rapid;
-  m.tip.kind = nc::MotionKind::kLinear;
-  m.tip.start_mm = tip_mm_;
-  Eigen::Vector3d end = tip_mm_;
-  for (int a = 0; a < 3; ++a) {
-    if (const nc::Word* w = words["XYZ"[a]])
-      end[a] = absolute_ ? w->value * unit_mm_ : end[a] + w->value * unit_mm_;
-  }
-  m.tip.end_mm = end;
-  m.q0 = q_;
+  m.rapid = effect.motion.kind == nc::MotionKind::kRapid;
+  m.tip = effect.motion;
+  if (m.tip.kind == nc::MotionKind::kRapid) m.tip.kind = nc::MotionKind::kLinear;
+  m.tip.feed = 0.0;  // (the move's feed is m.feed, in mm/min)
+  m.q0 = m.q1 = AxisVector::Zero(machine_.axis_count());
   for (int k = 0; k < machine_.axis_count(); ++k) {
     const AxisName n = machine_.axis_order[static_cast<size_t>(k)];
     if (!is_rotary(n)) continue;
-    if (const nc::Word* w = words[axis_char(n)])
-      q_[k] = absolute_ ? w->value * units::kRadPerDeg : q_[k] + w->value * units::kRadPerDeg;
+    const size_t r = static_cast<size_t>(axis_char(n) - 'A');
+    m.q0[k] = before.rotary_rad[r];
+    m.q1[k] = after.rotary_rad[r];
   }
-  m.q1 = q_;
-  m.by_angles = !vector;
-  m.a0 = axis_;
-  if (vector && ijk) {
-    Eigen::Vector3d a = Eigen::Vector3d::Zero();
-    for (int c = 0; c < 3; ++c)
-      if (const nc::Word* w = words["IJK"[c]]) a[c] = w->value;
-    if (a.norm() < 1e-9) fail(1, "the tool axis I J K is zero");
-    axis_ = a.normalized();
-  }
-  m.a1 = axis_;
-  if (arc) {
-    if (!tip_word) fail(1, "an arc without end point words");
-    arc_centre(words, end, m.tip);
-  }
-  m.feed_mode = feed_mode_;
-  m.feed = feed_;
-  if (!m.rapid) {
-    if (feed_mode_ == nc::kG93InverseTime && !words['F'])
-      fail(1, "a feed move under G93 (inverse time) needs F in its block");
-    if (feed_ < 0 || (feed_ == 0 && words['F']))
-      fail(1, "the feed rate must be positive; correct F");
-    if (feed_ == 0) fail(1, "a feed move with no feed rate; add F");
-  }
-  tip_mm_ = end;
+  m.by_angles = form_ != InputForm::kToolVector;
+  m.a0 = before.tool_axis;
+  m.a1 = after.tool_axis;
+  m.feed_mode = after.feed_mode;
+  m.feed = after.feed_mode == nc::kG93InverseTime ? after.feed : after.feed * after.unit_mm;
+  if (!m.rapid && after.feed_mode == nc::kG93InverseTime && !words['F'])
+    fail(1, "a feed move under G93 (inverse time) needs F in its block");
   out.has_move = true;
-}
-
-void FiveAxisReader::arc_centre(const GcodeWords& words, const Eigen::Vector3d& end,
-                                nc::Motion& tip) const {
-  tip.kind = nc::MotionKind::kArc;
-  tip.plane = plane_;
-  tip.clockwise = motion_ == nc::kG2ArcClockwise;
-  static constexpr int kIn[3][2] = {{0, 1}, {2, 0}, {1, 2}};
-  Eigen::Vector3d c = tip_mm_;
-  for (int j = 0; j < 2; ++j) {
-    const int a = kIn[plane_][j];
-    const nc::Word* w = words["IJK"[a]];
-    const double off = w ? w->value * unit_mm_ : 0.0;
-    c[a] = arc_absolute_ ? off : tip_mm_[a] + off;
-  }
-  tip.center_mm = c;
-  const int a0 = kIn[plane_][0], a1 = kIn[plane_][1];
-  const double r0 = std::hypot(tip_mm_[a0] - c[a0], tip_mm_[a1] - c[a1]);
-  const double r1 = std::hypot(end[a0] - c[a0], end[a1] - c[a1]);
-  if (r0 < 1e-9) fail(1, "arc centre at its start point");
-  if (std::abs(r0 - r1) > std::max(0.0127, 1e-3 * r0))
-    fail(1, fmt::format("arc radius to the end ({:.4f} mm) differs from the radius to the start "
-                        "({:.4f} mm)",
-                        r1, r0));
 }
 
 }  // namespace volmap::post

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "core/common/units.h"
 #include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "gcode/nc_writer.h"
@@ -35,9 +36,9 @@ double FiveAxisPost::move_time_min(const FiveAxisMove& m) const {
   if (L > 1e-9) return L / m.feed;
   double deg = 0;
   if (m.by_angles)
-    deg = (m.q1 - m.q0).norm() * kRadToDeg;
+    deg = (m.q1 - m.q0).norm() * units::kDegPerRad;
   else
-    deg = angle_between(m.a0, m.a1) * kRadToDeg;
+    deg = angle_between(m.a0, m.a1) * units::kDegPerRad;
   return deg / m.feed;
 }
 
@@ -68,8 +69,8 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
     const AxisName n = mach.axis_order[static_cast<size_t>(k)];
     word(axis_char(n));
     if (is_rotary(n)) {
-      append_number(s, c[k] * kRadToDeg, o_.angle_decimals);
-      rot2 += std::pow((c[k] - from[k]) * kRadToDeg, 2);
+      append_number(s, c[k] * units::kDegPerRad, o_.angle_decimals);
+      rot2 += std::pow((c[k] - from[k]) * units::kDegPerRad, 2);
     } else {
       append_number(s, c[k] / unit_mm, dec);
       xyz2 += std::pow((c[k] - from[k]) / unit_mm, 2);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "core/common/units.h"
 #include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "gcode/nc_writer.h"
@@ -22,8 +23,6 @@
 namespace volmap::post::five_axis_detail {
 
 using Eigen::Vector3d;
-
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 inline double angle_between(const Vector3d& a, const Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
@@ -70,7 +69,7 @@ class FiveAxisPost {
     try {
       check_within_travel(m, u_nom);
     } catch (const std::invalid_argument& e) {
-      fail(std::string(e.what()) + "; place the part elsewhere on the table (--part-origin)");
+      fail(std::string(e.what()) + "; place the part elsewhere on the table (`part_origin`)");
     }
     const AxisVector c = tf_.command(u_nom);
     double lin = 0, rot = 0;
@@ -84,7 +83,7 @@ class FiveAxisPost {
     try {
       check_within_travel(m, c);
     } catch (const std::invalid_argument& e) {
-      fail(std::string(e.what()) + "; place the part elsewhere on the table (--part-origin)");
+      fail(std::string(e.what()) + "; place the part elsewhere on the table (`part_origin`)");
     }
     ++report_.poses;
     return c;
@@ -103,7 +102,7 @@ class FiveAxisPost {
     std::string k;
     for (int i = 0; i < mach.axis_count(); ++i) {
       if (is_rotary(mach.axis_order[static_cast<size_t>(i)]))
-        append_number(k, c[i] * kRadToDeg, o_.angle_decimals);
+        append_number(k, c[i] * units::kDegPerRad, o_.angle_decimals);
       else
         append_number(k, c[i] / unit_mm, dec);
       k += ' ';

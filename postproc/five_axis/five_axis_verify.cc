@@ -7,6 +7,7 @@
 
 #include "core/common/golden_section.h"
 #include "core/common/input_error.h"
+#include "core/common/units.h"
 #include "gcode/nc_path.h"
 #include "postproc/five_axis/five_axis_post.h"
 #include "postproc/five_axis/five_axis_transform.h"
@@ -16,7 +17,6 @@ namespace {
 
 using Eigen::Vector3d;
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr size_t kWindow = 24;  ///< nominal moves searched ahead of the cursor
 
 double angle_between(const Vector3d& a, const Vector3d& b) {
@@ -97,7 +97,7 @@ class Verifier {
 
   int samples_for(double tip_mm, double rot_rad) const {
     const int a = static_cast<int>(std::ceil(tip_mm / o_.sample_step_mm));
-    const int b = static_cast<int>(std::ceil(rot_rad * kRadToDeg / 0.5));
+    const int b = static_cast<int>(std::ceil(rot_rad * units::kDegPerRad / 0.5));
     return std::max({8, a, b});
   }
 

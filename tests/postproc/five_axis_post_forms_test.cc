@@ -166,6 +166,33 @@ TEST(FiveAxisPost, RefusesWithFileAndLine) {
   refuse("G1 X1 Y1 Z1 I0 J0 K0 F100\n", "zero");
 }
 
+// The five-axis reader runs on the three-axis post's interpreter, so it
+// reads the modal rules as LinuxCNC does (each checked with rs274 -g): a
+// lone G94 sets the feed rate to zero ("Cannot do g1 with zero feed
+// rate"), G80 leaves no motion mode for axis words that follow, an M code
+// LinuxCNC does not know is refused, and a G17 arc takes no K.
+TEST(FiveAxisPost, ModalRulesAreTheInterpretersAsLinuxCncs) {
+  const Machine m = test::sample_machine("lei-hsu-xyzac");
+  auto refusal = [&](const std::string& p) -> std::string {
+    std::string text;
+    try {
+      run_post(p, m, ErrorSet{}, post::FiveAxisPostOptions{}, text);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string start = "G21 G90 G94 G17\nG0 X0 Y0 Z10 A0 C0\n";
+  EXPECT_NE(refusal(start + "G1 X1 F100\nG94\nG1 X2\n").find("test.ngc:5: G1 with no feed rate"),
+            std::string::npos);
+  EXPECT_EQ(refusal(start + "G1 X1 F100\nG94 F200 G1 X2\n"), "");
+  EXPECT_NE(refusal(start + "G1 X1 F100\nG80\nX2\n").find("G80 active"), std::string::npos);
+  EXPECT_NE(refusal(start + "M250\n").find("M code is not supported"), std::string::npos);
+  EXPECT_NE(refusal(start + "G2 X2 Y0 I1 J0 K0 F100\n").find("K word given for an arc"),
+            std::string::npos);
+  EXPECT_EQ(refusal(start + "M428\nG1 X1 F100\nM429\n"), "");  // stripped, not interpreted
+}
+
 TEST(FiveAxisPost, LinesWithoutMovesPassUnchanged) {
   const Machine m = test::sample_machine("lei-hsu-xyzac");
   const std::string prog =
