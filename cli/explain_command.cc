@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/message_wording.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
 #include "core/explain/explain.h"
@@ -48,7 +49,7 @@ Runner register_explain(CLI::App& app) {
   sub->footer(
       "Example:\n  volmap explain --recordings samples/recordings/reversal.csv "
       "--machine samples/machines/hsu-3axis.json --json explain.json --report explain.html");
-  return [o]() -> int {
+  return [o, sub, &app]() -> int {
     std::vector<std::string> inputs{o->recordings};
     if (!o->machine.empty()) inputs.push_back(o->machine);
     if (!o->baseline.empty()) inputs.push_back(o->baseline);
@@ -71,7 +72,11 @@ Runner register_explain(CLI::App& app) {
       opt.baseline = &baseline;
       opt.baseline_file = o->baseline;
     }
-    const ExplainResult res = explain(m, rec, opt);
+    ExplainResult res = explain(m, rec, opt);
+    // Notes and remedies name options by their fields (`baseline`): the
+    // reader of this command's JSON and report types flags.
+    for (std::string& note : res.notes) note = flag_wording(note, app, sub);
+    for (Confounded& c : res.confounded) c.remedy = flag_wording(c.remedy, app, sub);
     // Both outputs are complete before either is committed.
     std::unique_ptr<AtomicOutput> json_out, html_out;
     if (!o->json.empty()) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/message_wording.h"
 
 namespace volmap::cli {
 namespace {
@@ -52,16 +53,21 @@ int main(int argc, char** argv) {
     std::cerr << "volmap: " << e.what() << " (see volmap --help)\n";
     return 2;
   }
+  const CLI::App* verb = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front();
+  // The libraries name fields (`tolerance_um`); the user types flags.
+  const auto wording = [&](const char* message) {
+    return volmap::cli::flag_wording(message, app, verb);
+  };
   try {
     for (const CLI::App* sub : app.get_subcommands()) return runners.at(sub)();
   } catch (const volmap::cli::UsageError& e) {
-    std::cerr << "volmap: " << e.what() << " (see volmap "
+    std::cerr << "volmap: " << wording(e.what()) << " (see volmap "
               << (app.get_subcommands().empty() ? ""
                                                 : app.get_subcommands().front()->get_name() + " ")
               << "--help)\n";
     return 2;
   } catch (const std::exception& e) {
-    std::string msg = e.what();
+    std::string msg = wording(e.what());
     for (char& c : msg)
       if (c == '\n') c = ' ';
     std::cerr << "volmap: " << msg << "\n";

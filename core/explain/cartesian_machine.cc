@@ -16,7 +16,8 @@ Machine cartesian_machine_for(const Recordings& rec) {
   nlohmann::ordered_json doc;
   doc["format"] = "volmap-machine/1";
   doc["name"] = "cartesian";
-  doc["description"] = "Cartesian machine with the axes of the recording (explain, no --machine)";
+  doc["description"] =
+      "Cartesian machine with the axes of the recording (explain without a machine file)";
   nlohmann::ordered_json axes = nlohmann::ordered_json::object();
   nlohmann::ordered_json tool = nlohmann::ordered_json::array();
   nlohmann::ordered_json work = nlohmann::ordered_json::array();

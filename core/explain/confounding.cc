@@ -56,7 +56,7 @@ std::string remedy_for(const std::string& a, const std::string& b) {
   if (has("sag"))
     return "measure the deflecting axis at two positions of the other axes, or give the geometric "
            "errors as a "
-           "fixed --baseline";
+           "fixed `baseline`";
   return "add test points where the two regressors do not move together (other axis positions, "
          "both directions, "
          "another order of the points)";

@@ -47,7 +47,7 @@ void add_notes(const CandidateContext& ctx, const Selection& sel, ExplainResult&
   const ExplainOptions& opt = ctx.options;
   if (opt.machine_assumed && !ctx.rotary_axes.empty())
     res.notes.push_back(
-        "no --machine: the rotary axes were taken to turn the workpiece about lines through the "
+        "no `machine`: the rotary axes were taken to turn the workpiece about lines through the "
         "origin along X, Y or Z, so effects of the rotary axes (wobble, positioning, a sag driven "
         "by a rotary angle) were not tried; give the machine that made the recording for them");
   for (const std::string& s : sel.not_estimable)
@@ -59,7 +59,7 @@ void add_notes(const CandidateContext& ctx, const Selection& sel, ExplainResult&
       res.notes.push_back(
           "the baseline lacks " + missing +
           " (the position of a rotary axis line), which explain does not fit; findings on rotary "
-          "axes may stand in for them: add them to the baseline, or explain without --baseline");
+          "axes may stand in for them: add them to the baseline, or explain without `baseline`");
   }
 }
 

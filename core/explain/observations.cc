@@ -22,7 +22,7 @@ void check_recorded_axes_exist(const Machine& m, const Recordings& rec) {
     if (rec.has_axis(ax) && !m.index_of(ax))
       throw InputError(rec.file, 0,
                        fmt::format("the recording has a {} column but the machine has no {} axis; "
-                                   "give the machine that made the recording (--machine)",
+                                   "give the machine that made the recording (`machine`)",
                                    position_column_name(ax), axis_letter(ax)));
   }
 }

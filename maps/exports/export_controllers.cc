@@ -33,7 +33,7 @@ std::vector<ExportFile> linuxcnc(const VolumetricTable& t, const ExportOptions& 
     const GridAxis& g = t.grid[static_cast<size_t>(j)];
     if (g.count > kMaxEntries)
       throw ExportError(fmt::format(
-          "--format linuxcnc: axis {} has {} nodes; LinuxCNC takes at most {} entries per joint: "
+          "`format` linuxcnc: axis {} has {} nodes; LinuxCNC takes at most {} entries per joint: "
           "build the table with a spacing of at least {:g} mm on {}",
           axis_char(g.axis), g.count, kMaxEntries, (g.end - g.start) / (kMaxEntries - 1),
           axis_char(g.axis)));
@@ -77,7 +77,7 @@ std::vector<ExportFile> siemens_lec(const VolumetricTable& t, const ExportOption
     require_uniform(t, j, "siemens-lec");
     if (g.count > kMaxPoints)
       throw ExportError(fmt::format(
-          "--format siemens-lec: axis {} has {} points; $AA_ENC_COMP takes at most {} per axis "
+          "`format` siemens-lec: axis {} has {} points; $AA_ENC_COMP takes at most {} per axis "
           "(MD38000 MM_ENC_COMP_MAX_POINTS): build the table with a coarser spacing",
           axis_char(g.axis), g.count, kMaxPoints));
     const int c = du_channel(t, j);
@@ -129,7 +129,7 @@ std::vector<ExportFile> siemens_cec(const VolumetricTable& t, const ExportOption
     require_uniform(t, in, "siemens-cec");
     if (g.count > kMaxPoints)
       throw ExportError(
-          fmt::format("--format siemens-cec: axis {} has {} points; a CEC table takes at most {} "
+          fmt::format("`format` siemens-cec: axis {} has {} points; a CEC table takes at most {} "
                       "(MD18342 MM_CEC_MAX_POINTS): build the table with a coarser spacing",
                       axis_char(g.axis), g.count, kMaxPoints));
     for (int out = 0; out < 3; ++out) {
@@ -138,7 +138,7 @@ std::vector<ExportFile> siemens_cec(const VolumetricTable& t, const ExportOption
           is_bidirectional(t, in) ? std::vector<int>{+1, -1} : std::vector<int>{0};
       for (int dir : dirs) {
         if (table >= kMaxTables)
-          throw ExportError(fmt::format("--format siemens-cec: more than {} tables", kMaxTables));
+          throw ExportError(fmt::format("`format` siemens-cec: more than {} tables", kMaxTables));
         const std::vector<double> du = along_axis(t, home, in, du_channel(t, out), dir);
         const double at_home = du[static_cast<size_t>(home[static_cast<size_t>(in)])];
         text += fmt::format("; table {}: {} = F({}){}\n", table,

@@ -75,7 +75,7 @@ AxisPitch axis_pitch(const VolumetricTable& t, const std::vector<std::int64_t>& 
   const double interval_units = g.spacing / unit;
   if (std::abs(interval_units - std::round(interval_units)) > 1e-6)
     throw ExportError(fmt::format(
-        "--format fanuc: axis {}: the spacing {:g} mm is not a whole number of detection units "
+        "`format` fanuc: axis {}: the spacing {:g} mm is not a whole number of detection units "
         "({:g} mm; parameter 3624 is an integer): build the table with a spacing that is",
         k, g.spacing, unit));
   AxisPitch p;
@@ -99,7 +99,7 @@ AxisPitch axis_pitch(const VolumetricTable& t, const std::vector<std::int64_t>& 
     double step = 0.0;
     for (size_t n = 1; n < plus.size(); ++n) step = std::max(step, std::abs(plus[n] - plus[n - 1]));
     throw ExportError(
-        fmt::format("--format fanuc: axis {}: the correction changes by up to {:.3f} um over one "
+        fmt::format("`format` fanuc: axis {}: the correction changes by up to {:.3f} um over one "
                     "{:g} mm interval; "
                     "a pitch compensation point takes at most +-{} x magnification {} detection "
                     "units ({:g} mm): "
@@ -222,7 +222,7 @@ std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) 
   require_three_axis(t, "fanuc");
   const double unit = o.detection_unit_mm;
   if (!(unit > 0.0) || !std::isfinite(unit))
-    throw ExportError("--format fanuc: the detection unit must be a positive number of mm");
+    throw ExportError("`format` fanuc: the detection unit must be a positive number of mm");
   const std::vector<std::int64_t> home = home_line_nodes(t, o);
 
   // ---- pitch error compensation ----
@@ -234,7 +234,7 @@ std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o) 
   }
   if (next > kMaxPitchPoints)
     throw ExportError(
-        fmt::format("--format fanuc: {} pitch error compensation points needed, the control has {} "
+        fmt::format("`format` fanuc: {} pitch error compensation points needed, the control has {} "
                     "(data numbers "
                     "0..{}) for all axes together: build the table with a coarser spacing",
                     next, kMaxPitchPoints, kMaxPitchPoints - 1));

@@ -132,7 +132,7 @@ ExportFile kinematics_comp_file(const GridAxis& g, const AxisErrors* e) {
         evaluate_axis(*e, g.node(node), 0, OutsidePolicy::kError, v);
       } catch (const std::out_of_range& ex) {
         throw ExportError(
-            fmt::format("--format heidenhain: the errors do not cover the table: {}", ex.what()));
+            fmt::format("`format` heidenhain: the errors do not cover the table: {}", ex.what()));
       }
     }
     std::vector<std::string> cells;
@@ -151,8 +151,8 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
   const bool nonlinear = t.three_axis_correction();
   if (!nonlinear && o.errors == nullptr)
     throw ExportError(fmt::format(
-        "--format heidenhain: nonlinear axis error compensation takes three-axis tables only (this "
-        "one has {} axes); give --errors E.csv for the KinematicsComp component-error tables",
+        "`format` heidenhain: nonlinear axis error compensation takes three-axis tables only (this "
+        "one has {} axes); give `errors` E.csv for the KinematicsComp component-error tables",
         t.axis_count()));
   std::vector<ExportFile> files;
   std::string notes = fmt::format(

@@ -65,7 +65,7 @@ std::vector<ExportFile> isg_csv(const VolumetricTable& t, const ExportOptions& o
         }
       } catch (const std::out_of_range& ex) {
         throw ExportError(
-            fmt::format("--format isg-csv: the errors do not cover the table: {}", ex.what()));
+            fmt::format("`format` isg-csv: the errors do not cover the table: {}", ex.what()));
       }
       text += fixed(display_position(g.axis, g.node(k)), 4);
       for (int c = 0; c < kComponentCount; ++c)

@@ -28,7 +28,7 @@ std::vector<ExportFile> export_table(const VolumetricTable& table, const std::st
   if (format == "isg-csv") return exporters::isg_csv(table, options);
   std::string known;
   for (const std::string& f : export_formats()) known += (known.empty() ? "" : ", ") + f;
-  throw ExportError(fmt::format("--format {}: unknown format; expected one of {}", format, known));
+  throw ExportError(fmt::format("`format` {}: unknown format; expected one of {}", format, known));
 }
 
 void write_export(const std::string& dir, const std::vector<ExportFile>& files) {
@@ -95,8 +95,8 @@ std::vector<double> along_axis(const VolumetricTable& t, const std::vector<std::
 const ErrorSet& require_errors(const ExportOptions& o, const std::string& format) {
   if (o.errors == nullptr)
     throw ExportError(fmt::format(
-        "--format {}: needs the component errors the table was built from; give them with "
-        "--errors E.csv (volmap, ISG CSV or Etalon format)",
+        "`format` {}: needs the component errors the table was built from; give them with "
+        "`errors` E.csv (volmap, ISG CSV or Etalon format)",
         format));
   return *o.errors;
 }
@@ -123,7 +123,7 @@ void require_uniform(const VolumetricTable& t, int axis, const std::string& form
   const GridAxis& g = t.grid[static_cast<size_t>(axis)];
   if (!g.uniform())
     throw ExportError(fmt::format(
-        "--format {}: axis {}: the spacing {:g} does not divide the travel {:g}..{:g} (the last "
+        "`format` {}: axis {}: the spacing {:g} does not divide the travel {:g}..{:g} (the last "
         "cell is shorter), but the controller needs equidistant points; build the table with a "
         "spacing that divides the travel",
         format, axis_char(g.axis), g.spacing, g.start, g.end));
@@ -134,10 +134,10 @@ void require_three_axis(const VolumetricTable& t, const std::string& format) {
     std::string axes;
     for (const GridAxis& g : t.grid) axes += axis_char(g.axis);
     throw ExportError(fmt::format(
-        "--format {}: the controller takes three-axis tables (linear X, Y, Z with the correction "
+        "`format` {}: the controller takes three-axis tables (linear X, Y, Z with the correction "
         "du) only, this table has {} axes ({}); export it as csv or json{}",
         format, t.axis_count(), axes,
-        format == "heidenhain" ? ", or give --errors for the KinematicsComp tables" : ""));
+        format == "heidenhain" ? ", or give `errors` for the KinematicsComp tables" : ""));
   }
 }
 

@@ -146,7 +146,7 @@ FactorizedTable read_factorized(std::istream& in, const std::string& file) {
     throw;
   } catch (const std::exception& e) {
     throw InputError::at_json_path(
-        file, where, fmt::format("{}; write it again with volmap map --form factorized", e.what()));
+        file, where, fmt::format("{}; write it again with `map.form` factorized", e.what()));
   }
 }
 

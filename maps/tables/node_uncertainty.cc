@@ -55,7 +55,7 @@ ParameterCovariance covariance_from_identify(const nlohmann::json& report, const
   std::string where = "";
   try {
     if (report.value("format", "") != "volmap-identify/1")
-      throw std::invalid_argument("not a volmap-identify/1 report (volmap identify --json)");
+      throw std::invalid_argument("not a volmap-identify/1 report (`identify.json`)");
     where = "/parameters";
     std::map<std::string, std::pair<double, std::string>> sigma;  // name -> (std error, unit)
     const nlohmann::json& params = report.at("parameters");
@@ -68,7 +68,7 @@ ParameterCovariance covariance_from_identify(const nlohmann::json& report, const
       if (kind == "component")
         throw std::invalid_argument(fmt::format(
             "{} is a component-curve parameter; only identified location errors are propagated "
-            "(identify without --component fits, or drop --covariance)",
+            "(a report of identify without `identify.component` fits, or drop `covariance`)",
             name));
       if (kind != "location") continue;
       if (p.at("std_error").is_null())

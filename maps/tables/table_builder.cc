@@ -389,7 +389,7 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
         what = what.substr(0, what.find("; give a coarser"));
         throw TableTooLarge(fmt::format(
             "automatic spacing for {} um{}: at {} {} (best so far {:.3g} x the tolerance at {}); "
-            "give --spacing, or raise the tolerance",
+            "give `spacing`, or raise the tolerance",
             tolerance_um, rotary ? fmt::format(" / {} urad", tolerance_urad) : "",
             spacing_text(m, s_mm, s_deg), what, best, best_at.empty() ? "none" : best_at));
       }
@@ -458,7 +458,7 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
   }
   throw std::invalid_argument(fmt::format(
       "no spacing down to {} reaches {} um{} with {} interpolation (best: {:.3g} x the tolerance "
-      "at {}); raise the tolerance or use --interpolation cubic",
+      "at {}); raise the tolerance or use `interpolation` cubic",
       spacing_text(m, lin.back(), rot.back()), tolerance_um,
       rotary ? fmt::format(" / {} urad", tolerance_urad) : "", interpolation_name(check.method),
       best, best_at));

@@ -201,8 +201,8 @@ VolumetricTable read_table(std::istream& in, const std::string& file) {
   r.bytes(magic, sizeof magic, "the magic number");
   if (magic[0] == '{')
     r.fail(
-        "a factorized table (JSON, volmap map --form factorized) has no grid; exports take "
-        "the full grid: build it with volmap map --form full");
+        "a factorized table (JSON, `map.form` factorized) has no grid; exports take "
+        "the full grid: build it with `map.form` full");
   if (std::memcmp(magic, kTableMagic, sizeof magic) != 0)
     r.fail("not a volmap table (no VOLMAPTB magic); give a file written by volmap map");
   const std::uint32_t version = r.uint<std::uint32_t>("the version");

@@ -175,7 +175,7 @@ VolumetricTable make_table_layout(const ErrorModel& model, const std::vector<dou
       grid += fmt::format("{}{}", grid.empty() ? "" : " x ", g.count);
     throw TableTooLarge(fmt::format(
         "the table would take {:.2f} GiB ({} nodes, {} layer{}, {} channels), more than the cap "
-        "of {:.2f} GiB; give a coarser --spacing",
+        "of {:.2f} GiB; give a coarser `spacing`",
         static_cast<double>(bytes) / (1 << 30), grid, t.layer_count(),
         t.layer_count() > 1 ? "s" : "", t.channel_count() + extra_channels,
         static_cast<double>(max_bytes) / (1 << 30)));

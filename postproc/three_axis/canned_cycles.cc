@@ -120,13 +120,13 @@ void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, co
     throw InputError(
         file_, current_line_,
         fmt::format(
-            "--expand-cycles writes out G73 G81 G82 G83 G85 G89 only; this is G{} (it stops "
-            "the spindle); post it without --expand-cycles (its hole bottom and R plane are "
+            "`expand_cycles` writes out G73 G81 G82 G83 G85 G89 only; this is G{} (it stops "
+            "the spindle); post it without `expand_cycles` (its hole bottom and R plane are "
             "corrected)",
             code / 10));
   if (s.feed_mode == nc::kG93InverseTime)
     throw InputError(file_, current_line_,
-                     "--expand-cycles under inverse time feed (G93): use G94 for the cycles");
+                     "`expand_cycles` under inverse time feed (G93): use G94 for the cycles");
   if (const nc::Word* p = b.find('P')) cycle_dwell_s_ = p->value;
   write_expanded_cycle_block(b, code);
   const size_t holes = 1 + fx.more_holes.size();
@@ -184,8 +184,8 @@ void ProgramPost::expand_pecks(const Corrector& c, const nc::Motion& h, int code
     if (++pecks > kMaxPecks)
       throw InputError(
           file_, current_line_,
-          fmt::format("more than {} pecks in one hole (Q {:g}); --expand-cycles would write "
-                      "them all: raise Q or post without --expand-cycles",
+          fmt::format("more than {} pecks in one hole (Q {:g}); `expand_cycles` would write "
+                      "them all: raise Q or post without `expand_cycles`",
                       kMaxPecks, s.cycle_q));
     const Vector3d level(x, y, depth * unit + wo_z);
     expanded_feed(c, at, level, lower, spaces);

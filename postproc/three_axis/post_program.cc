@@ -22,7 +22,7 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
                     const maps::VolumetricTable* table, const nc::ProgramSetup& setup,
                     const PostOptions& options) {
   if (!(options.tolerance_mm > 0) || !std::isfinite(options.tolerance_mm))
-    throw std::invalid_argument("--tolerance-um must be a positive finite number");
+    throw std::invalid_argument("`tolerance_um` must be a positive finite number");
   if (table)
     Corrector check(machine, *table, options.outside);  // a wrong table fails before any output
   ProgramPost post(in_name, out, machine, errors, setup, options, table);
@@ -62,7 +62,7 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
     post.flush();
     throw InputError(in_name, number,
                      std::string("this block leaves the error tables: ") + e.what() +
-                         " (volmap post --clamp holds the end values)");
+                         " (`post.clamp` holds the end values)");
   } catch (...) {
     post.flush();
     throw;

@@ -33,7 +33,7 @@ const Corrector& ProgramPost::corrector() {
       throw InputError(
           file_, current_line_,
           fmt::format("the tool length offset here is {:g} mm, but a compensation table holds the "
-                      "errors of the machine file's {:g} mm tool only; post with --errors instead",
+                      "errors of the machine file's {:g} mm tool only; post with `errors` instead",
                       offset, machine_.tool_length_mm));
     it = correctors_
              .emplace(L, table_

@@ -108,7 +108,7 @@ DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector
   } catch (const std::out_of_range& e) {
     throw InputError(name, line,
                      std::string("this block leaves the error tables: ") + e.what() +
-                         " (volmap verify --clamp holds the end values)");
+                         " (`verify.clamp` holds the end values)");
   }
 }
 

@@ -252,7 +252,7 @@ TEST(MapFiveAxis, TooLargeATableIsRefusedBeforeAllocating) {
     FAIL() << "no exception";
   } catch (const TableTooLarge& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("--spacing"), std::string::npos) << what;
+    EXPECT_NE(what.find("`spacing`"), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   }
   CheckOptions c;

@@ -489,7 +489,7 @@ TEST(PostTable, AnotherToolOrAnotherMachineIsRefused) {
     FAIL() << "a 130 mm tool was posted from a table of the 100 mm tool";
   } catch (const InputError& err) {
     EXPECT_EQ(err.line(), 3);  // the G43 line
-    EXPECT_NE(std::string(err.what()).find("post with --errors"), std::string::npos) << err.what();
+    EXPECT_NE(std::string(err.what()).find("post with `errors`"), std::string::npos) << err.what();
   }
   Machine other = m;
   other.name = "another-machine";

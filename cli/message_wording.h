@@ -1,0 +1,19 @@
+// The libraries name what a message is about by its field, in backquotes:
+// `tolerance_um` (an option of the running command) or `verify.clamp` (an
+// option of another one). A library user reads the field; the command line
+// shows the flag to type: --tolerance-um, `volmap verify --clamp`. A field
+// no command has stays as the library wrote it, backquotes and all, so a
+// misnamed field shows in the message and in tests/cli/message_wording_test.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+namespace volmap::cli {
+
+/// `message` with each backquoted field that names an option of `verb` (or,
+/// as `other.field`, of the command `other` of `app`) written as that
+/// option: `field` -> --field-name, `other.field` -> volmap other --field.
+std::string flag_wording(const std::string& message, const CLI::App& app, const CLI::App* verb);
+
+}  // namespace volmap::cli
