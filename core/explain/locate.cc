@@ -30,11 +30,11 @@ struct Regressor {
 /// variance a (sin, cos) pair of the best period explains, less 2 ln(M) / n
 /// for having chosen the best of M periods (the expected maximum under
 /// noise). Periods: 2.2 x the median spacing of the targets .. span / 3.
-std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, double>>& xv,
-                                           double sst, const std::string& component,
+std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, double>>& points,
+                                           double ss_total, const std::string& component,
                                            const Regressor& reg) {
   std::vector<double> xs, sum, cnt;
-  for (const auto& [x, r] : xv) {
+  for (const auto& [x, r] : points) {
     if (xs.empty() || x - xs.back() > 1e-9) {
       xs.push_back(x);
       sum.push_back(0);
@@ -51,8 +51,8 @@ std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, d
                p_max = span / 3.0;
   if (!(p_max > 1.5 * p_min)) return std::nullopt;
   double m_all = 0;
-  for (const auto& p : xv) m_all += p.second;
-  m_all /= static_cast<double>(xv.size());
+  for (const auto& p : points) m_all += p.second;
+  m_all /= static_cast<double>(points.size());
   const double f_lo = 1.0 / p_max, f_hi = 1.0 / p_min,
                df = std::max(1.0 / (4.0 * span), (f_hi - f_lo) / 600.0);
   double best = 0, best_period = 0, best_amp = 0;
@@ -78,8 +78,8 @@ std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, d
       best_amp = std::hypot(a, b);
     }
   }
-  const double n = static_cast<double>(xv.size());
-  const double strength = best / sst - 2.0 * std::log(std::max(count, 1)) / n;
+  const double n = static_cast<double>(points.size());
+  const double strength = best / ss_total - 2.0 * std::log(std::max(count, 1)) / n;
   if (strength < 0.05) return std::nullopt;
   return Mismatch{component, reg.name + " (periodic)",
                   fmt::format("a period of {:.4g} {} along {}: amplitude {:.3g} um", best_period,
@@ -92,67 +92,70 @@ std::vector<Mismatch> locate(const Observations& obs, const Eigen::VectorXd& res
   std::vector<Mismatch> out;
   for (int g = 0; g < kComponentKinds; ++g) {
     if (!obs.has_component[g]) continue;
-    std::vector<int> eq;
+    std::vector<int> equations;
     for (std::size_t e = 0; e < obs.count; ++e)
-      if (obs.component[e] == g) eq.push_back(static_cast<int>(e));
-    if (eq.size() < 12) continue;
+      if (obs.component[e] == g) equations.push_back(static_cast<int>(e));
+    if (equations.size() < 12) continue;
     double mean = 0;
-    for (int e : eq) mean += residual_um[e];
-    mean /= static_cast<double>(eq.size());
-    double sst = 0;
-    for (int e : eq) sst += (residual_um[e] - mean) * (residual_um[e] - mean);
-    if (sst <= 0) continue;
+    for (int e : equations) mean += residual_um[e];
+    mean /= static_cast<double>(equations.size());
+    double ss_component = 0;
+    for (int e : equations) ss_component += (residual_um[e] - mean) * (residual_um[e] - mean);
+    if (ss_component <= 0) continue;
     for (const Regressor& reg : regs) {
-      std::vector<std::pair<double, double>> xv;
-      for (int e : eq) {
+      std::vector<std::pair<double, double>> points;  // (regressor value, residual um)
+      for (int e : equations) {
         const double x =
             reg.value[static_cast<std::size_t>(obs.recording_row[static_cast<std::size_t>(e)])];
-        if (std::isfinite(x)) xv.push_back({x, residual_um[e]});
+        if (std::isfinite(x)) points.push_back({x, residual_um[e]});
       }
-      if (xv.size() < 12) continue;
-      std::sort(xv.begin(), xv.end());
+      if (points.size() < 12) continue;
+      std::sort(points.begin(), points.end());
       // Bins: the levels of a categorical regressor, else up to 8 quantile bins.
       std::vector<std::size_t> edges{0};
       if (reg.categorical) {
-        for (std::size_t i = 1; i < xv.size(); ++i)
-          if (xv[i].first != xv[i - 1].first) edges.push_back(i);
+        for (std::size_t i = 1; i < points.size(); ++i)
+          if (points[i].first != points[i - 1].first) edges.push_back(i);
       } else {
-        const std::size_t bins = std::min<std::size_t>(8, xv.size() / 4);
+        const std::size_t bins = std::min<std::size_t>(8, points.size() / 4);
         for (std::size_t b = 1; b < bins; ++b) {
-          std::size_t i = b * xv.size() / bins;
-          while (i < xv.size() && i > 0 && xv[i].first == xv[i - 1].first) ++i;
-          if (i < xv.size() && i > edges.back()) edges.push_back(i);
+          std::size_t i = b * points.size() / bins;
+          while (i < points.size() && i > 0 && points[i].first == points[i - 1].first) ++i;
+          if (i < points.size() && i > edges.back()) edges.push_back(i);
         }
       }
-      edges.push_back(xv.size());
-      const std::size_t k = edges.size() - 1;
-      if (k < 2) continue;
-      double m_all = 0;
-      for (auto& p : xv) m_all += p.second;
-      m_all /= static_cast<double>(xv.size());
-      double ssb = 0, sstot = 0, best = 0, best_lo = 0, best_hi = 0;
-      for (auto& p : xv) sstot += (p.second - m_all) * (p.second - m_all);
-      for (std::size_t b = 0; b < k; ++b) {
+      edges.push_back(points.size());
+      const std::size_t n_bins = edges.size() - 1;
+      if (n_bins < 2) continue;
+      double mean_all = 0;
+      for (auto& p : points) mean_all += p.second;
+      mean_all /= static_cast<double>(points.size());
+      double ss_between_bins = 0, ss_total = 0, best = 0, best_lo = 0, best_hi = 0;
+      for (auto& p : points) ss_total += (p.second - mean_all) * (p.second - mean_all);
+      for (std::size_t b = 0; b < n_bins; ++b) {
         double s = 0;
-        for (std::size_t i = edges[b]; i < edges[b + 1]; ++i) s += xv[i].second;
-        const double cnt = static_cast<double>(edges[b + 1] - edges[b]);
-        const double mb = s / cnt;
-        ssb += cnt * (mb - m_all) * (mb - m_all);
-        if (std::abs(mb - m_all) > std::abs(best)) {
-          best = mb - m_all;
-          best_lo = xv[edges[b]].first;
-          best_hi = xv[edges[b + 1] - 1].first;
+        for (std::size_t i = edges[b]; i < edges[b + 1]; ++i) s += points[i].second;
+        const double bin_count = static_cast<double>(edges[b + 1] - edges[b]);
+        const double bin_mean = s / bin_count;
+        ss_between_bins += bin_count * (bin_mean - mean_all) * (bin_mean - mean_all);
+        if (std::abs(bin_mean - mean_all) > std::abs(best)) {
+          best = bin_mean - mean_all;
+          best_lo = points[edges[b]].first;
+          best_hi = points[edges[b + 1] - 1].first;
         }
       }
-      if (sstot <= 0) continue;
+      if (ss_total <= 0) continue;
       if (!reg.periodic_unit.empty())
-        if (std::optional<Mismatch> p = periodic_structure(xv, sstot, kComponentName[g], reg))
+        if (std::optional<Mismatch> p =
+                periodic_structure(points, ss_total, kComponentName[g], reg))
           out.push_back(*p);
-      const double nn = static_cast<double>(xv.size());
-      const double adj = 1.0 - ((sstot - ssb) / (nn - static_cast<double>(k))) / (sstot / (nn - 1));
-      if (adj < 0.05) continue;
-      out.push_back(
-          {kComponentName[g], reg.name, reg.where(best_lo, best_hi, best), std::min(1.0, adj)});
+      const double n_points = static_cast<double>(points.size());
+      const double adjusted_r2 =
+          1.0 - ((ss_total - ss_between_bins) / (n_points - static_cast<double>(n_bins))) /
+                    (ss_total / (n_points - 1));
+      if (adjusted_r2 < 0.05) continue;
+      out.push_back({kComponentName[g], reg.name, reg.where(best_lo, best_hi, best),
+                     std::min(1.0, adjusted_r2)});
     }
   }
   std::stable_sort(out.begin(), out.end(),
