@@ -58,6 +58,7 @@ function(volmap_use_pch target)
       find_package(GTest REQUIRED)
       volmap_pch_host(${host} Eigen3::Eigen nlohmann_json::nlohmann_json fmt::fmt GTest::gtest)
       target_precompile_headers(${host} PRIVATE <gtest/gtest.h>)
+      target_compile_options(${host} PRIVATE ${VOLMAP_TEST_FLAGS})  # as the tests
     endif()
   elseif(NOT TARGET ${host})
     volmap_pch_host(${host} Eigen3::Eigen nlohmann_json::nlohmann_json fmt::fmt)
