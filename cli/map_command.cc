@@ -397,9 +397,9 @@ Runner register_map(CLI::App& app) {
   sub->footer(
       "Example:\n  volmap map --machine samples/machines/hsu-3axis.json "
       "--errors samples/errors/hsu-3axis.csv --tolerance-um 0.5 -o hsu.vmt\n"
-      "  volmap map --machine samples/machines/hsu-3axis.json --errors laser.isg.csv --spacing "
-      "10,10,10 "
-      "--repeatability-um 0.5 --report map.html -o hsu.vmt\n"
+      "  volmap map --machine samples/machines/hsu-3axis.json --errors "
+      "samples/errors/hsu-3axis.csv \\\n"
+      "      --spacing 10,10,10 --repeatability-um 0.5 --report map.html -o hsu-10mm.vmt\n"
       "  volmap map --machine samples/machines/lei-hsu-xyzac.json "
       "--errors samples/errors/lei-hsu-xyzac.csv --tolerance-um 2 --tolerance-urad 2 -o xyzac.vmt");
 

@@ -117,10 +117,10 @@ Runner register_post(CLI::App& app) {
   sub->footer(
       "Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors "
       "samples/errors/hsu-3axis.csv \\\n"
-      "      --work-offset 100,100,50 part.ngc -o part-compensated.ngc\n"
+      "      --work-offset 250,200,100 samples/programs/pocket.ngc -o pocket-compensated.ngc\n"
       "  volmap post --machine samples/machines/lei-hsu-xyzac.json --errors "
       "samples/errors/lei-hsu-xyzac.csv \\\n"
-      "      --part-origin 0,0,0 impeller-7bl-xyzac.ngc -o impeller-machine.ngc");
+      "      samples/programs/cone-vector.ngc -o cone-machine.ngc");
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
     if (o->five.applies(m)) {

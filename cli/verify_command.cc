@@ -8,6 +8,7 @@
 
 #include "cli/commands.h"
 #include "cli/five_axis_options.h"
+#include "cli/option_checks.h"
 #include "cli/program_setup.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
@@ -57,6 +58,30 @@ void write_report(AtomicOutput* report, const Opts& o, const Machine& m, const R
   report->commit();
 }
 
+// cli.md: with --tolerance-um T, exit status 3 and one line on stderr when
+// the actual path of the compensated program leaves T; without it, a
+// warning on stderr whenever the compensated program deviates more than the
+// nominal one (a post and a verify given different machines, errors or
+// placements is the usual cause). Runs after the results are written.
+template <typename Opts, typename Stats>
+int verdict(const Opts& o, const Stats& before, const Stats& after) {
+  if (o.tolerance_um > 0) {
+    if (!(after.max_um > o.tolerance_um)) return 0;
+    std::cerr << fmt::format(
+        "volmap: {}: the actual tool path leaves the tolerance: max {:.3f} um from the nominal "
+        "path (at line {}), more than --tolerance-um {:g}\n",
+        o.program, after.max_um, after.worst_line, o.tolerance_um);
+    return 3;
+  }
+  if (after.max_um > before.max_um)
+    std::cerr << fmt::format(
+        "volmap: warning: {} deviates more from the nominal path than the uncompensated {} "
+        "({:.3f} um against {:.3f} um): were post and verify given the same machine, errors and "
+        "placement (--work-offset, --part-origin)?\n",
+        o.program, o.nominal, after.max_um, before.max_um);
+  return 0;
+}
+
 // Five axes: tip deviation (um) and tool-axis deviation (urad), before and
 // after (postproc/five_axis/five_axis_verify.h).
 template <typename Opts>
@@ -87,7 +112,7 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
     doc["before"] = stats(r.before);
     doc["after"] = stats(r.after);
     std::cout << doc.dump(2) << "\n";
-    return 0;
+    return verdict(o, r.before, r.after);
   }
   std::cout << fmt::format(
       "deviation of the actual tool pose from the nominal path (five axes, feed moves)\n"
@@ -98,7 +123,7 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
       r.before.max_um, r.before.rms_um, r.before.max_urad, r.before.rms_urad, r.before.samples,
       r.before.worst_line, r.after.max_um, r.after.rms_um, r.after.max_urad, r.after.rms_urad,
       r.after.samples, r.after.worst_line);
-  return 0;
+  return verdict(o, r.before, r.after);
 }
 
 Runner register_verify(CLI::App& app) {
@@ -107,6 +132,7 @@ Runner register_verify(CLI::App& app) {
     ProgramSetupOptions placement;
     FiveAxisCliOptions five;
     double step_mm = 0.25;
+    double tolerance_um = 0.0;  ///< 0: not given
     bool json = false, clamp = false;
   };
   auto o = std::make_shared<Opts>();
@@ -133,6 +159,11 @@ Runner register_verify(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_flag("--clamp", o->clamp,
                 "Hold the end value of an error table outside it (default: refuse)");
+  sub->add_option("--tolerance-um", o->tolerance_um,
+                  "Exit with status 3 (one line on stderr) when the compensated program's actual "
+                  "tool path is farther than this from the nominal path (um; the tip on five "
+                  "axes). Without it, a warning when it is farther than the uncompensated one")
+      ->check(kFinitePositive);
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
   sub->add_option("--report", o->report,
                   "Also write a self-contained HTML page: the deviation along the whole path "
@@ -140,11 +171,12 @@ Runner register_verify(CLI::App& app) {
   sub->footer(
       "Example:\n  volmap verify --machine samples/machines/hsu-3axis.json --errors "
       "samples/errors/hsu-3axis.csv \\\n"
-      "      --work-offset 100,100,50 --nominal part.ngc --program part-compensated.ngc --json "
-      "--report verify.html\n"
+      "      --work-offset 250,200,100 --nominal samples/programs/pocket.ngc \\\n"
+      "      --program pocket-compensated.ngc --tolerance-um 1 --json --report verify.html\n"
       "  volmap verify --machine samples/machines/lei-hsu-xyzac.json --errors "
       "samples/errors/lei-hsu-xyzac.csv \\\n"
-      "      --nominal impeller-7bl-xyzac.ngc --program impeller-machine.ngc");
+      "      --nominal samples/programs/cone-vector.ngc --program cone-machine.ngc\n"
+      "(the same machine, errors and placement as the post that wrote the program)");
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
     const ErrorSet e = load_errors(o->errors, parse_errors_format(o->errors_format));
@@ -171,7 +203,7 @@ Runner register_verify(CLI::App& app) {
       doc["before"] = stats(r.before);
       doc["after"] = stats(r.after);
       std::cout << doc.dump(2) << "\n";
-      return 0;
+      return verdict(*o, r.before, r.after);
     }
     std::cout << fmt::format(
         "deviation of the actual tool path from the nominal one (feed moves)\n"
@@ -181,7 +213,7 @@ Runner register_verify(CLI::App& app) {
         "worst at line {})\n",
         r.before.max_um, r.before.rms_um, r.before.samples, r.before.worst_line, r.after.max_um,
         r.after.rms_um, r.after.samples, r.after.worst_line);
-    return 0;
+    return verdict(*o, r.before, r.after);
   };
 }
 

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <istream>
@@ -97,15 +98,48 @@ std::vector<std::string> JsonObject::keys() const {
   return out;
 }
 
+namespace {
+
+// Levenshtein distance (insertions, deletions, substitutions).
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+}  // namespace
+
+std::string unknown_key_message(const std::string& key,
+                                std::initializer_list<const char*> allowed) {
+  std::string list, nearest;
+  std::size_t best = std::max<std::size_t>(3, key.size() / 3) + 1;
+  for (const char* a : allowed) {
+    list += std::string(list.empty() ? "" : ", ") + a;
+    const std::size_t d = edit_distance(key, a);
+    if (d < best) {
+      best = d;
+      nearest = a;
+    }
+  }
+  if (nearest.empty()) return fmt::format("unknown key \"{}\"; expected one of: {}", key, list);
+  return fmt::format("unknown key \"{}\"; did you mean \"{}\"? (expected one of: {})", key, nearest,
+                     list);
+}
+
 void JsonObject::allow_only(std::initializer_list<const char*> allowed) const {
   for (auto it = value_.begin(); it != value_.end(); ++it) {
     bool ok = false;
     for (const char* a : allowed) ok = ok || it.key() == a;
-    if (!ok) {
-      std::string list;
-      for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
-      fail(it.key(), fmt::format("unknown key \"{}\"; expected one of: {}", it.key(), list));
-    }
+    if (!ok) fail(it.key(), unknown_key_message(it.key(), allowed));
   }
 }
 

@@ -29,6 +29,11 @@ std::pair<int, int> json_error_line_column(const std::string& text, std::size_t 
 /// line and column of the first such number in `text`.
 [[noreturn]] void throw_json_number_overflow(const std::string& text, const std::string& file);
 
+/// The message for `key`, which an object that takes only `allowed` does
+/// not: the nearest allowed key first when one is close (a typo: at most
+/// max(3, length / 3) single-character edits away), then the list.
+std::string unknown_key_message(const std::string& key, std::initializer_list<const char*> allowed);
+
 /// A JSON object at a path, with typed accessors that throw InputError.
 class JsonObject {
  public:

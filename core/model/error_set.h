@@ -111,6 +111,9 @@ std::vector<double> pchip_slopes_periodic(const std::vector<double>& x,
 namespace detail {
 [[noreturn, gnu::cold, gnu::noinline]] void throw_outside(const AxisErrorTable& table, double q);
 inline constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
+/// How far outside its table a position may lie and still be at the end
+/// (mm or rad): check_within_travel's slack.
+inline constexpr double kEndSlack = 1e-9;
 }  // namespace detail
 
 /// Evaluates a table at position q (mm or rad): the six component errors
@@ -135,6 +138,12 @@ inline void evaluate_table(const AxisErrorTable& table, double q, OutsidePolicy 
       q = x_first + std::fmod(q - x_first, detail::kTwoPi);
       if (q < x_first) q += detail::kTwoPi;
       q = std::clamp(q, x_first, x_last);
+    } else if (q >= x_first - detail::kEndSlack && q <= x_last + detail::kEndSlack) {
+      // A position equal to an end up to rounding (a backward
+      // transformation's A = 30.000000000000004 deg on a table ending at
+      // 30) is at that end, not outside; the slack is the travel check's.
+      out = table.value[q < x_first ? 0 : n - 1];
+      return;
     } else {
       if (policy == OutsidePolicy::kError || std::isnan(q)) detail::throw_outside(table, q);
       if (clamped != nullptr) ++*clamped;

@@ -28,6 +28,18 @@ class Reader {
     throw InputError::at_json_path(file_, path, msg);
   }
 
+  /// Every key of object `obj` (at `path`) is one of `allowed`: a misspelt
+  /// key is an error, never ignored (it would change the machine).
+  void only(const json& obj, const std::string& path,
+            std::initializer_list<const char*> allowed) const {
+    for (auto it = obj.begin(); it != obj.end(); ++it) {
+      bool ok = false;
+      for (const char* a : allowed) ok = ok || it.key() == a;
+      if (!ok)
+        fail((path == "/" ? "" : path) + "/" + it.key(), unknown_key_message(it.key(), allowed));
+    }
+  }
+
   const json& member(const json& obj, const std::string& path, const char* key) const {
     auto it = obj.find(key);
     if (it == obj.end()) fail(path, fmt::format("missing required key \"{}\"", key));
@@ -96,6 +108,7 @@ json parse_machine_document(const std::string& text, const std::string& file) {
 /// One entry of /axes: type, direction, travel and home (internal units).
 AxisSpec read_axis(const Reader& r, AxisName a, const json& ax, const std::string& path) {
   if (!ax.is_object()) r.fail(path, "expected an object");
+  r.only(ax, path, {"type", "direction", "travel_mm", "travel_deg", "home_mm", "home_deg"});
   AxisSpec s;
   const json& type = r.member(ax, path, "type");
   if (type == "linear")
@@ -169,6 +182,7 @@ void read_chain(const Reader& r, const json& doc, const char* key, AxisSpecs& sp
   for (size_t i = 0; i < c.size(); ++i) {
     const std::string jp = path + "/" + std::to_string(i);
     if (!c[i].is_object()) r.fail(jp, "expected {\"axis\": ..., \"offset_mm\": [...]}");
+    r.only(c[i], jp, {"axis", "offset_mm"});
     Joint j;
     j.axis = r.axis_name(r.member(c[i], jp, "axis"), jp + "/axis");
     auto& s = spec[static_cast<size_t>(j.axis)];
@@ -194,6 +208,7 @@ void read_offsets_and_tool(const Reader& r, const json& doc, Machine& m) {
     m.spindle_offset_mm = r.vec3(*it, "/spindle_offset_mm");
   const json& tool = r.member(doc, "/", "tool");
   if (!tool.is_object()) r.fail("/tool", "expected {\"length_mm\": ..., \"axis\": [...]}");
+  r.only(tool, "/tool", {"length_mm", "axis"});
   m.tool_length_mm = r.number(r.member(tool, "/tool", "length_mm"), "/tool/length_mm");
   if (m.tool_length_mm < 0) r.fail("/tool/length_mm", "a tool length cannot be negative");
   if (auto it = tool.find("axis"); it != tool.end()) m.tool_axis = r.unit3(*it, "/tool/axis");
@@ -258,6 +273,9 @@ Machine read_machine_json(std::istream& in, const std::string& file) {
   const json& fmt_v = r.member(doc, "/", "format");
   if (!fmt_v.is_string() || fmt_v.get<std::string>() != "volmap-machine/1")
     r.fail("/format", "expected \"volmap-machine/1\"");
+  r.only(doc, "/",
+         {"format", "name", "description", "structure", "axes", "workpiece_chain", "tool_chain",
+          "workpiece_origin_mm", "spindle_offset_mm", "tool", "measured_at"});
 
   Machine m;
   if (auto it = doc.find("name"); it != doc.end()) {

@@ -320,6 +320,26 @@ TEST(OutsidePolicy, ClampHoldsTheEndValueAndCounts) {
   EXPECT_EQ(clamped, 2u);
 }
 
+// A position equal to an end up to rounding is at the end (issue 23: a
+// backward transformation gave A = 30.000000000000004 deg against a table
+// ending at 30 deg and was refused): within the travel check's 1e-9 slack
+// it takes the end value, uncounted; beyond it the policy applies.
+TEST(OutsidePolicy, RoundingAtAnEndIsInside) {
+  AxisErrorTable a = single_component_table({-100 * kPi / 180, 0, 30 * kPi / 180}, {1, 2, 3}, 2);
+  a.axis = AxisName::A;
+  Values out{};
+  std::uint64_t clamped = 0;
+  const double a_rounded = 30.000000000000004 * kPi / 180;  // what the issue saw
+  ASSERT_GT(a_rounded, a.position.back());
+  evaluate_table(a, a_rounded, OutsidePolicy::kError, out, &clamped);
+  EXPECT_EQ(out[2], 3.0);
+  evaluate_table(a, -100 * kPi / 180 - 5e-10, OutsidePolicy::kError, out, &clamped);
+  EXPECT_EQ(out[2], 1.0);
+  EXPECT_EQ(clamped, 0u);
+  EXPECT_THROW(evaluate_table(a, 30 * kPi / 180 + 2e-9, OutsidePolicy::kError, out),
+               std::out_of_range);
+}
+
 // ---------------------------------------------------------------------------
 // Periodic tables
 

@@ -79,7 +79,7 @@ TEST(MachineJson, BadValuesNameTheJsonPath) {
       {"\"workpiece_chain\": []", "\"workpiece_chain\": [{\"axis\": \"X\"}]",
        "m.json:/tool_chain/0/axis:", "twice"},
       {"\"length_mm\": 0", "\"length_mm\": -5", "m.json:/tool/length_mm:", "negative"},
-      {"\"length_mm\": 0", "\"length\": 0", "m.json:/tool:", "length_mm"},
+      {"\"length_mm\": 0", "\"length\": 0", "m.json:/tool/length:", "did you mean \"length_mm\""},
   };
   for (const BadCase& c : cases) {
     std::string doc = kGood;
@@ -90,6 +90,35 @@ TEST(MachineJson, BadValuesNameTheJsonPath) {
     EXPECT_EQ(msg.rfind(c.path, 0), 0u) << msg;
     EXPECT_NE(msg.find(c.words), std::string::npos) << msg;
     EXPECT_EQ(msg.find('\n'), std::string::npos);
+  }
+}
+
+// A misspelt key would silently change the machine (issue 23: a
+// `workpiece_orign_mm` left the workpiece origin at zero): every key of
+// every object is known, or the file is refused at the key's JSON path with
+// the nearest known key.
+TEST(MachineJson, MisspeltKeysAreRefusedWithTheNearestKey) {
+  const BadCase cases[] = {
+      {"\"tool\":", "\"workpiece_orign_mm\": [1, 2, 3], \"tool\":", "m.json:/workpiece_orign_mm:",
+       "did you mean \"workpiece_origin_mm\""},
+      {"\"travel_mm\"", "\"home_mm\": 5, \"travel_mm\"", "", ""},  // (a known key: loads)
+      {"\"travel_mm\": [0, 100]", "\"travel_mm\": [0, 100], \"hom_mm\": 5",
+       "m.json:/axes/X/hom_mm:", "did you mean \"home_mm\""},
+      {"{\"axis\": \"X\"}", "{\"axis\": \"X\", \"ofset_mm\": [0, 0, 0]}",
+       "m.json:/tool_chain/0/ofset_mm:", "did you mean \"offset_mm\""},
+      {"\"length_mm\": 0", "\"length_mm\": 0, \"axsi\": [0, 0, 1]",
+       "m.json:/tool/axsi:", "did you mean \"axis\""},
+      {"\"tool\":", "\"coolant\": true, \"tool\":", "m.json:/coolant:",
+       "unknown key \"coolant\"; expected one of: format, name"},
+  };
+  for (const BadCase& c : cases) {
+    std::string doc = kGood;
+    const size_t at = doc.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    doc.replace(at, std::string(c.from).size(), c.to);
+    const std::string msg = error_of(doc);
+    EXPECT_EQ(msg.rfind(c.path, 0), 0u) << msg;
+    EXPECT_NE(msg.find(c.words), std::string::npos) << msg;
   }
 }
 
