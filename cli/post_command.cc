@@ -148,6 +148,7 @@ Runner register_post(CLI::App& app) {
     opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
     opt.expand_cycles = o->expand_cycles;
     opt.keep_arcs = o->keep_arcs;
+    opt.subroutine_path = o->placement.subroutine_dirs(o->in);
     std::ifstream file_in;
     std::istream* in = &std::cin;
     std::string in_name = "<stdin>";
@@ -167,6 +168,7 @@ Runner register_post(CLI::App& app) {
         table ? post::post_program(*in, in_name, out.stream(), m, *table, setup, opt)
               : post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
     out.commit();
+    print_read_notes(in_name, r.read);
     if (isatty(2))
       std::cerr << fmt::format("{} lines, {} changed, {} added, max correction {:.2f} um\n",
                                r.lines, r.lines_changed, r.lines_added, r.max_correction_mm * 1e3);

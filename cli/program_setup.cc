@@ -1,5 +1,10 @@
 #include "cli/program_setup.h"
 
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+
 #include "cli/parse_util.h"
 
 namespace volmap::cli {
@@ -14,6 +19,28 @@ void ProgramSetupOptions::add_to(CLI::App& sub) {
   sub.add_option("--initial-position", initial,
                  "Where the tool stands at the start, X,Y,Z in program coordinates (G54, mm); "
                  "for programs that never command an axis");
+  sub.add_option("--subroutine-path", subroutine_path,
+                 "Folders (DIR[:DIR...]) where O<name> call finds NAME.ngc (LinuxCNC's "
+                 "SUBROUTINE_PATH); default: the program's folder");
+}
+
+std::vector<std::string> ProgramSetupOptions::subroutine_dirs(const std::string& program) const {
+  std::vector<std::string> dirs;
+  if (subroutine_path.empty()) {
+    const std::filesystem::path folder =
+        program == "-" ? std::filesystem::path() : std::filesystem::path(program).parent_path();
+    dirs.push_back(folder.empty() ? "." : folder.string());
+    return dirs;
+  }
+  std::size_t b = 0;
+  for (;;) {
+    const std::size_t e = subroutine_path.find(':', b);
+    const std::string dir = subroutine_path.substr(b, e == std::string::npos ? e : e - b);
+    if (!dir.empty()) dirs.push_back(dir);
+    if (e == std::string::npos) break;
+    b = e + 1;
+  }
+  return dirs;
 }
 
 nc::ProgramSetup ProgramSetupOptions::load(const Machine& m) const {
@@ -31,6 +58,29 @@ nc::ProgramSetup ProgramSetupOptions::load(const Machine& m) const {
     setup.initial_position_mm = Eigen::Vector3d(p[0], p[1], p[2]) + setup.work_offset_mm[0];
   }
   return setup;
+}
+
+void print_read_notes(const std::string& in_name, const nc::ReadReport& r) {
+  if (r.byte_order_mark)
+    std::cerr << fmt::format(
+        "note: {}: the UTF-8 byte-order mark at the start is not written out (LinuxCNC refuses "
+        "it)\n",
+        in_name);
+  if (r.leader_lines > 0)
+    std::cerr << fmt::format(
+        "note: {}: line{} 1{} before the first '%' (tape leader) written as they are, not run\n",
+        in_name, r.leader_lines > 1 ? "s" : "",
+        r.leader_lines > 1 ? fmt::format("-{}", r.leader_lines) : "");
+  if (r.flattened_from > 0)
+    std::cerr << fmt::format(
+        "note: {}:{}: from here on the program uses parameters, expressions or O-word control "
+        "flow: written flat (evaluated), {} line{} ran as {} block{}\n",
+        in_name, r.flattened_from, r.flat_source_lines, r.flat_source_lines == 1 ? "" : "s",
+        r.flat_blocks, r.flat_blocks == 1 ? "" : "s");
+  if (r.trailer_lines > 0)
+    std::cerr << fmt::format("note: {}: {} line{} after the closing '%' written as they are, not "
+                             "run\n",
+                             in_name, r.trailer_lines, r.trailer_lines > 1 ? "s" : "");
 }
 
 }  // namespace volmap::cli

@@ -189,6 +189,7 @@ Runner register_verify(CLI::App& app) {
     post::VerifyOptions opt;
     opt.sample_step_mm = o->step_mm;
     opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+    opt.subroutine_path = o->placement.subroutine_dirs(o->nominal);
     const post::VerifyResult r =
         post::verify_programs(a, o->nominal, b, o->program, m, e, setup, opt);
     write_report(report.get(), *o, m, r, false);

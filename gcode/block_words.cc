@@ -80,7 +80,10 @@ void collect_other_word(const Block& b, const std::string& file, const std::stri
 }  // namespace
 
 void refuse_block(const std::string& file, const Block& b, const Word* w, const std::string& msg) {
-  throw InputError(file, b.line, w ? static_cast<int>(w->begin) + 1 : 0, msg);
+  const std::string& from = b.file ? *b.file : file;
+  if (b.evaluated)  // a column of the evaluated text would point nowhere in the file
+    throw InputError(from, b.line, 0, msg + " (in the evaluated block \"" + b.text + "\")");
+  throw InputError(from, b.line, w ? static_cast<int>(w->begin) + 1 : 0, msg);
 }
 
 void BlockWords::null_unfilled() {

@@ -34,6 +34,7 @@ void read_var_file(const std::string& path, ProgramSetup& setup) {
     if (!(ls >> param)) return;
     if (!(ls >> value) || !std::isfinite(value))
       throw InputError(path, n, "expected \"<parameter> <value>\"");
+    setup.parameters[param] = value;
     // G54: 5221..5223, each following system 20 further, up to G59.3 (5381).
     if (param >= 5221 && param <= 5383) {
       const int k = (param - 5221) / 20, a = (param - 5221) % 20;

@@ -279,6 +279,8 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
   b.percent = false;
   b.words.clear();
   b.comment.clear();
+  b.file = nullptr;
+  b.evaluated = false;
   size_t i = 0;
   const size_t n = text.size();
   const char* const t = b.text.c_str();

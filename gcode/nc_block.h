@@ -31,6 +31,12 @@ struct Block {
   bool percent = false;       ///< a '%' program delimiter line
   std::vector<Word> words;    ///< in order of appearance, N words included
   std::string comment;        ///< text of the first ( ) comment (for MSG)
+  /// The file the line is from, when not the program's own (a subroutine
+  /// file of a flattened program); set by the caller after lexing.
+  const std::string* file = nullptr;
+  /// The line as the flattener evaluated it (parameters and expressions
+  /// replaced by their values): columns are this text's, not the file's.
+  bool evaluated = false;
 
   const Word* find(char letter) const {
     for (const Word& w : words)

@@ -32,6 +32,11 @@ struct ProgramSetup {
   /// program without Z) be corrected. Unknown by default: then the first
   /// feed move must come after a rapid that sets X, Y and Z.
   std::optional<Eigen::Vector3d> initial_position_mm;
+  /// Numbered parameters of a LinuxCNC parameter (.var) file, as given
+  /// (the work offsets among them are also in work_offset_mm): what a
+  /// program that reads #5161 (G28's home) or its own persistent
+  /// parameters sees.
+  std::map<int, double> parameters;
 
   // Five-axis programs (the five-axis post reads them through this same
   // interpreter).

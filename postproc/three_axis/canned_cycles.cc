@@ -118,14 +118,14 @@ void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, co
   if (code != nc::kG73PeckDrillChipBreak && code != nc::kG81Drill && code != nc::kG82DrillDwell &&
       code != nc::kG83PeckDrill && code != nc::kG85Bore && code != nc::kG89BoreDwell)
     throw InputError(
-        file_, current_line_,
+        *line_file_, current_line_,
         fmt::format(
             "`expand_cycles` writes out G73 G81 G82 G83 G85 G89 only; this is G{} (it stops "
             "the spindle); post it without `expand_cycles` (its hole bottom and R plane are "
             "corrected)",
             code / 10));
   if (s.feed_mode == nc::kG93InverseTime)
-    throw InputError(file_, current_line_,
+    throw InputError(*line_file_, current_line_,
                      "`expand_cycles` under inverse time feed (G93): use G94 for the cycles");
   if (const nc::Word* p = b.find('P')) cycle_dwell_s_ = p->value;
   write_expanded_cycle_block(b, code);
@@ -183,7 +183,7 @@ void ProgramPost::expand_pecks(const Corrector& c, const nc::Motion& h, int code
   for (double depth = r_prog - s.cycle_q; depth > bottom_prog; depth -= s.cycle_q) {
     if (++pecks > kMaxPecks)
       throw InputError(
-          file_, current_line_,
+          *line_file_, current_line_,
           fmt::format("more than {} pecks in one hole (Q {:g}); `expand_cycles` would write "
                       "them all: raise Q or post without `expand_cycles`",
                       kMaxPecks, s.cycle_q));

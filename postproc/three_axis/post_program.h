@@ -25,9 +25,11 @@
 #include <cstdint>
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include "core/model/error_model.h"
 #include "gcode/nc_interpreter.h"
+#include "gcode/program_reader.h"
 
 namespace volmap::maps {
 struct VolumetricTable;
@@ -55,6 +57,8 @@ struct PostOptions {
   /// "Speed"); the output is the same byte for byte. false: every line the
   /// general way (the tests compare both).
   bool shortcuts = true;
+  /// Where `O<name> call` finds NAME.ngc (LinuxCNC's SUBROUTINE_PATH).
+  std::vector<std::string> subroutine_path;
 };
 
 struct PostReport {
@@ -63,6 +67,8 @@ struct PostReport {
   std::uint64_t lines_added = 0;
   std::uint64_t points_corrected = 0;
   double max_correction_mm = 0.0;
+  /// How the program was read: its tape frame, whether it was flattened.
+  nc::ReadReport read;
 };
 
 PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,

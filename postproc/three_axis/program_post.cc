@@ -31,7 +31,7 @@ const Corrector& ProgramPost::corrector() {
       // The table's errors are those of the machine file's tool; angular
       // errors act on another tool through another lever.
       throw InputError(
-          file_, current_line_,
+          *line_file_, current_line_,
           fmt::format("the tool length offset here is {:g} mm, but a compensation table holds the "
                       "errors of the machine file's {:g} mm tool only; post with `errors` instead",
                       offset, machine_.tool_length_mm));
@@ -100,7 +100,9 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   if (cr) line_ending_[line_ending_size_++] = '\r';
   if (newline) line_ending_[line_ending_size_++] = '\n';
   if (plain_line(text)) return;
-  nc::lex_block_into(text, number, file_, block_);
+  nc::lex_block_into(text, number, *line_file_, block_);
+  block_.file = line_file_ == &file_ ? nullptr : line_file_;
+  block_.evaluated = evaluated_;
   const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
   const double offset_before = interp_.state().tool_length_mm;
@@ -143,7 +145,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   }
   // Feed moves: lines, arcs and helices.
   if (fx.stop_code)
-    throw InputError(file_, number,
+    throw InputError(*line_file_, number,
                      "a feed move and a stop code (M0/M1/M2/M30/M60) in one block; "
                      "put the stop code on its own line");
   feed_line(text, b, fx, c, style);

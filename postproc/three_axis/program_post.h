@@ -29,6 +29,7 @@
 
 #include "core/common/input_error.h"
 #include "gcode/nc_interpreter.h"
+#include "gcode/program_reader.h"
 #include "gcode/nc_writer.h"
 #include "postproc/three_axis/char_buffer.h"
 #include "postproc/three_axis/corrector.h"
@@ -109,7 +110,22 @@ class ProgramPost {
         options_(options),
         interp_(setup, file) {}
 
+  /// One line of the program as the reader hands it out (a block, or
+  /// verbatim text such as tape leader).
+  void line(const nc::ProgramLine& l) {
+    if (l.verbatim) {
+      ++report_.lines;
+      line_ending_[0] = '\n';
+      line_ending_size_ = l.newline ? 1 : 0;
+      emit(l.text);
+      return;
+    }
+    line_file_ = l.file ? l.file : &file_;
+    evaluated_ = l.rewritten;
+    line(l.text, l.line, l.newline);
+  }
   void line(std::string_view text, int number, bool newline);
+  const nc::Interpreter& interpreter() const { return interp_; }
   /// Writes out what emit() gathered (also on failure: what was done).
   void flush() {
     out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
@@ -153,7 +169,7 @@ class ProgramPost {
     last_ = {&c, nominal, cmd, d};
     const double corr = (cmd - nominal).norm();
     if (!std::isfinite(corr))
-      throw InputError(file_, current_line_,
+      throw InputError(*line_file_, current_line_,
                        "the correction is not finite here; check the errors file");
     report_.max_correction_mm = std::max(report_.max_correction_mm, corr);
     ++report_.points_corrected;
@@ -380,6 +396,8 @@ class ProgramPost {
   }
 
   std::string file_;
+  const std::string* line_file_ = &file_;  ///< the line's file (a subroutine file's lines too)
+  bool evaluated_ = false;                 ///< the line was evaluated by the flattener
   std::ostream& out_;
   const Machine& machine_;
   const ErrorSet& errors_;

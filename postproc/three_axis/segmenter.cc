@@ -24,7 +24,7 @@ int ProgramPost::arc_initial_pieces(const nc::Motion& m) const {
   const double pieces = std::ceil(std::abs(g.sweep) / max_step);
   if (!(pieces <= kMaxArcPieces))  // also NaN: never cast to int out of range
     throw InputError(
-        file_, current_line_,
+        *line_file_, current_line_,
         fmt::format("the arc needs more than {} pieces to keep {:g} um (radius {:g} mm); "
                     "raise `tolerance_um` or check the arc's centre",
                     kMaxArcPieces, tol * 1e3, r));
@@ -136,7 +136,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         done.push_back({c1, p.s1});
         if (done.size() > kMaxPieces)
           throw InputError(
-              file_, current_line_,
+              *line_file_, current_line_,
               fmt::format("more than {} pieces needed to keep {:g} um; raise `tolerance_um`",
                           kMaxPieces, tol * 1e3));
         c_prev = c1;

@@ -12,6 +12,7 @@
 
 #include "core/common/input_error.h"
 #include "gcode/nc_path.h"
+#include "gcode/program_reader.h"
 #include "postproc/three_axis/corrector.h"
 
 namespace volmap::post {
@@ -29,16 +30,22 @@ struct FeedMove {
 
 // Feed moves of a program, as the interpreter sees them.
 std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
-                                 const nc::ProgramSetup& setup, double default_tool_mm) {
+                                 const nc::ProgramSetup& setup, double default_tool_mm,
+                                 const std::vector<std::string>& subroutine_path) {
   nc::Interpreter interp(setup, name);
+  nc::ProgramReader reader(in, name, interp, subroutine_path);
   std::vector<FeedMove> out;
-  std::string text;
-  int number = 0;
+  nc::ProgramLine l;
+  nc::Block b;
   nc::BlockEffect fx;
-  while (std::getline(in, text)) {
-    ++number;
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const nc::Block b = nc::lex_block(text, number, name);
+  while (reader.next(l)) {
+    if (l.verbatim) continue;
+    const int number = l.line;
+    std::string_view text = l.text;
+    if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+    nc::lex_block_into(text, number, *l.file, b);
+    b.file = l.file == &reader.file() ? nullptr : l.file;
+    b.evaluated = l.rewritten;
     interp.execute(b, fx);
     if (!fx.has_motion) continue;
     // The machine file's tool (offset zero) plus the active tool length offset.
@@ -180,9 +187,10 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
                              const Machine& machine, const ErrorSet& errors,
                              const nc::ProgramSetup& setup, const VerifyOptions& options) {
   const std::vector<FeedMove> nom =
-      feed_moves(nominal, nominal_name, setup, machine.tool_length_mm);
+      feed_moves(nominal, nominal_name, setup, machine.tool_length_mm, options.subroutine_path);
   const std::vector<FeedMove> out =
-      feed_moves(compensated, compensated_name, setup, machine.tool_length_mm);
+      feed_moves(compensated, compensated_name, setup, machine.tool_length_mm,
+                 options.subroutine_path);
   Run run(machine, errors, options.outside);
   VerifyResult r;
   std::vector<FeedMove> nominal_path;

@@ -15,6 +15,7 @@
 
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include "core/model/error_model.h"
 #include "gcode/nc_interpreter.h"
@@ -37,6 +38,8 @@ struct VerifyResult {
 struct VerifyOptions {
   double sample_step_mm = 0.25;
   OutsidePolicy outside = OutsidePolicy::kError;
+  /// Where `O<name> call` finds NAME.ngc (LinuxCNC's SUBROUTINE_PATH).
+  std::vector<std::string> subroutine_path;
 };
 
 VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_name,

@@ -182,9 +182,11 @@ TEST(BadInputCatalogue, StandardInputIsNamedInMessages) {
   EXPECT_EQ(to_file.status, 1);
   EXPECT_EQ(to_file.err.rfind("volmap: <stdin>:4:1: G41 is not supported", 0), 0u) << to_file.err;
   EXPECT_TRUE(fs::is_empty(d));
-  const CliResult to_stdout = run_volmap_in_source(post + "-o - < tests/bad/nc/o_word_sub.ngc");
+  const CliResult to_stdout =
+      run_volmap_in_source(post + "-o - < tests/bad/nc/parameter_undefined.ngc");
   EXPECT_EQ(to_stdout.status, 1);
-  EXPECT_EQ(to_stdout.err.rfind("volmap: <stdin>:4:1: O-word", 0), 0u) << to_stdout.err;
+  EXPECT_EQ(to_stdout.err.rfind("volmap: <stdin>:4:5: named parameter #<depth>", 0), 0u)
+      << to_stdout.err;
   // Standard output too gets nothing, even when the failure comes after
   // lines that were already post-processed (they are spooled, not streamed).
   EXPECT_TRUE(to_stdout.out.empty()) << to_stdout.out;

@@ -65,7 +65,7 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
       {"G28", "stored positions"},
       {"G92 X0", "G92"},
       {"G38.2 Z-5", "probing"},
-      {"M98 P100", "subroutine"},
+      {"M98 P100", "no O100 line"},
       {"G0 A10", "axis word A"},
       {"X1 X2", "twice"},
       {"G1 X1 Y1 Z1", "no feed rate"},

@@ -1,0 +1,326 @@
+#include "gcode/flatten/expression.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <numbers>
+
+namespace volmap::nc::flatten {
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+/// LinuxCNC's TOLERANCE_EQUAL: EQ and NE, and how close to an integer an
+/// integer value must be.
+constexpr double kToleranceEqual = 0.0001;
+
+enum class Op { kPower, kTimes, kDivide, kMod, kPlus, kMinus, kEq, kNe, kGt, kGe, kLt, kLe,
+                kAnd, kOr, kXor, kClose };
+
+int precedence(Op op) {
+  switch (op) {
+    case Op::kPower: return 6;
+    case Op::kTimes: case Op::kDivide: case Op::kMod: return 5;
+    case Op::kPlus: case Op::kMinus: return 4;
+    case Op::kEq: case Op::kNe: case Op::kGt: case Op::kGe: case Op::kLt: case Op::kLe: return 3;
+    case Op::kAnd: case Op::kOr: case Op::kXor: return 2;
+    case Op::kClose: return 1;
+  }
+  return 1;
+}
+
+bool is_letter(char c) { return c >= 'a' && c <= 'z'; }
+bool is_digit(char c) { return c >= '0' && c <= '9'; }
+
+}  // namespace
+
+void normalize(std::string_view line, NormalizedLine& out) {
+  out.text.clear();
+  out.column.clear();
+  char comment_end = 0;  // ')' inside ( ), '\n' after ';'
+  for (std::size_t k = 0; k < line.size(); ++k) {
+    char c = line[k];
+    if (comment_end == 0) {
+      if (c == ' ' || c == '\t') continue;
+      if (c == '(') comment_end = ')';
+      if (c == ';') comment_end = '\n';
+      if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    } else if (c == comment_end) {
+      comment_end = 0;
+    }
+    out.text += c;
+    out.column.push_back(static_cast<std::uint32_t>(k));
+  }
+}
+
+void ValueReader::fail(std::size_t at, std::string message) const {
+  throw ValueError{std::move(message), at};
+}
+
+bool ValueReader::is_literal(std::string_view text) {
+  std::size_t k = 0;
+  if (k < text.size() && (text[k] == '+' || text[k] == '-')) ++k;
+  bool digits = false;
+  for (; k < text.size(); ++k) {
+    if (is_digit(text[k])) digits = true;
+    else if (text[k] != '.') return false;
+  }
+  return digits;
+}
+
+double ValueReader::number(std::size_t& i) const {
+  const std::size_t begin = i;
+  if (at(i) == '+' || at(i) == '-') ++i;
+  bool point = false, digits = false;
+  for (;; ++i) {
+    const char c = at(i);
+    if (is_digit(c)) {
+      digits = true;
+    } else if (c == '.' && !point) {
+      point = true;
+    } else {
+      break;
+    }
+  }
+  if (!digits)
+    fail(begin, begin < t_.size() ? fmt::format("'{}' is not a number, a parameter or an "
+                                                "expression",
+                                                t_[begin])
+                                  : std::string("a value is missing at the end of the line"));
+  double v = 0;
+  const char* first = t_.data() + begin + (t_[begin] == '+' ? 1 : 0);
+  const auto r = std::from_chars(first, t_.data() + i, v);
+  if (r.ec != std::errc() || !std::isfinite(v)) fail(begin, "bad number");
+  return v;
+}
+
+double ValueReader::real_value(std::size_t& i) const {
+  const char c = at(i), c1 = at(i + 1);
+  if (c == '[') return expression(i);
+  if (c == '#') return parameter(i);
+  if ((c == '+' || c == '-') && c1 != '\0' && !is_digit(c1) && c1 != '.') {
+    ++i;
+    const double v = real_value(i);
+    return c == '-' ? -v : v;
+  }
+  if (is_letter(c)) return unary(i);
+  return number(i);
+}
+
+int ValueReader::integer_value(std::size_t& i) const {
+  const std::size_t begin = i;
+  const double v = real_value(i);
+  const double r = std::floor(v + 0.5);
+  if (std::abs(v - r) > kToleranceEqual)
+    fail(begin, fmt::format("{} is not an integer, and an integer is needed here", v));
+  if (std::abs(r) > 1e9) fail(begin, "integer out of range");
+  return static_cast<int>(r);
+}
+
+std::string ValueReader::name(std::size_t& i) const {
+  // At '<': up to '>'. (normalize() dropped the spaces and folded the case,
+  // as LinuxCNC does with names.)
+  const std::size_t begin = i++;
+  const std::size_t close = t_.find('>', i);
+  if (close == std::string_view::npos) fail(begin, "named parameter '<' is not closed; add '>'");
+  std::string n(t_.substr(i, close - i));
+  if (n.empty()) fail(begin, "named parameter without a name");
+  i = close + 1;
+  return n;
+}
+
+double ValueReader::parameter(std::size_t& i) const {
+  const std::size_t begin = i++;  // '#'
+  try {
+    if (at(i) == '<') {
+      const std::string n = name(i);
+      return p_.get(n);
+    }
+    const int n = integer_value(i);
+    return p_.get(n);
+  } catch (ValueError& e) {
+    if (e.at == static_cast<std::size_t>(-1)) e.at = begin;
+    throw;
+  }
+}
+
+ParameterTarget ValueReader::target(std::size_t& i) const {
+  ++i;  // '#'
+  ParameterTarget t;
+  if (at(i) == '<') {
+    t.name = name(i);
+  } else {
+    const std::size_t begin = i;
+    t.number = integer_value(i);
+    if (t.number < 1 || t.number >= kParameterCount)
+      fail(begin, fmt::format("parameter number {} is out of range (1 to {})", t.number,
+                              kParameterCount - 1));
+  }
+  return t;
+}
+
+double ValueReader::unary(std::size_t& i) const {
+  const std::size_t begin = i;
+  std::size_t e = i;
+  while (is_letter(at(e))) ++e;
+  const std::string_view fn = t_.substr(i, e - i);
+  i = e;
+  if (fn == "exists") {
+    if (at(i) != '[' || at(i + 1) != '#')
+      fail(begin, "EXISTS takes a parameter: EXISTS[#<name>]");
+    i += 2;
+    bool exists = true;  // a numbered parameter always exists (rs274)
+    if (at(i) == '<') {
+      exists = p_.exists(name(i));
+    } else {
+      const std::size_t number_at = i;
+      const int n = integer_value(i);
+      if (n < 1 || n >= kParameterCount)
+        fail(number_at, fmt::format("parameter number {} is out of range (1 to {})", n,
+                                    kParameterCount - 1));
+    }
+    if (at(i) != ']') fail(i, "EXISTS[#...] is not closed; add ']'");
+    ++i;
+    return exists ? 1.0 : 0.0;
+  }
+  static constexpr std::string_view kFunctions[] = {"abs", "acos", "asin", "atan", "cos",
+                                                    "exp", "fix",  "fup",  "ln",   "round",
+                                                    "sin", "sqrt", "tan"};
+  bool known = false;
+  for (std::string_view f : kFunctions) known = known || f == fn;
+  if (!known)
+    fail(begin, fmt::format("unknown function or operator '{}'; LinuxCNC's are ABS ACOS ASIN "
+                            "ATAN COS EXP FIX FUP LN ROUND SIN SQRT TAN EXISTS",
+                            fn));
+  if (at(i) != '[') fail(i, fmt::format("{} needs its argument in [ ]", fn));
+  const double x = expression(i);
+  if (fn == "atan") {
+    if (at(i) != '/' || at(i + 1) != '[')
+      fail(i, "ATAN takes two arguments: ATAN[y]/[x]");
+    ++i;
+    const double x2 = expression(i);
+    return std::atan2(x, x2) * kDegPerRad;
+  }
+  if (fn == "abs") return std::abs(x);
+  if (fn == "acos" || fn == "asin") {
+    if (x < -1.0 || x > 1.0)
+      fail(begin, fmt::format("argument to {} out of range (-1 to 1): {}", fn, x));
+    return (fn == "acos" ? std::acos(x) : std::asin(x)) * kDegPerRad;
+  }
+  if (fn == "cos") return std::cos(x * kRadPerDeg);
+  if (fn == "sin") return std::sin(x * kRadPerDeg);
+  if (fn == "tan") return std::tan(x * kRadPerDeg);
+  if (fn == "exp") return std::exp(x);
+  if (fn == "fix") return std::floor(x);
+  if (fn == "fup") return std::ceil(x);
+  if (fn == "ln") {
+    if (x <= 0.0) fail(begin, fmt::format("zero or negative argument to LN: {}", x));
+    return std::log(x);
+  }
+  if (fn == "round") return std::trunc(x + (x < 0.0 ? -0.5 : 0.5));
+  // sqrt
+  if (x < 0.0) fail(begin, fmt::format("negative argument to SQRT: {}", x));
+  return std::sqrt(x);
+}
+
+double ValueReader::expression(std::size_t& i) const {
+  // LinuxCNC's read_real_expression: operands and operators on two stacks,
+  // an operator reduced while the next one does not bind tighter.
+  const std::size_t open = i++;
+  std::vector<double> values;
+  std::vector<std::pair<Op, std::size_t>> ops;
+  auto apply = [&](Op op, std::size_t where) {
+    const double b = values.back();
+    values.pop_back();
+    double& a = values.back();
+    switch (op) {
+      case Op::kPower:
+        if (a < 0.0 && std::floor(b) != b)
+          fail(where, fmt::format("attempt to raise {} to the non-integer power {}", a, b));
+        a = std::pow(a, b);
+        break;
+      case Op::kTimes: a *= b; break;
+      case Op::kDivide:
+        if (b == 0.0) fail(where, "division by zero");
+        a /= b;
+        break;
+      case Op::kMod:
+        if (b == 0.0) fail(where, "MOD by zero");
+        a = std::fmod(a, b);
+        if (a < 0.0) a += std::abs(b);
+        break;
+      case Op::kPlus: a += b; break;
+      case Op::kMinus: a -= b; break;
+      case Op::kEq: a = std::abs(a - b) < kToleranceEqual ? 1.0 : 0.0; break;
+      case Op::kNe: a = std::abs(a - b) >= kToleranceEqual ? 1.0 : 0.0; break;
+      case Op::kGt: a = a > b ? 1.0 : 0.0; break;
+      case Op::kGe: a = a >= b ? 1.0 : 0.0; break;
+      case Op::kLt: a = a < b ? 1.0 : 0.0; break;
+      case Op::kLe: a = a <= b ? 1.0 : 0.0; break;
+      case Op::kAnd: a = (a != 0.0 && b != 0.0) ? 1.0 : 0.0; break;
+      case Op::kOr: a = (a != 0.0 || b != 0.0) ? 1.0 : 0.0; break;
+      case Op::kXor: a = ((a != 0.0) != (b != 0.0)) ? 1.0 : 0.0; break;
+      case Op::kClose: break;
+    }
+    if (!std::isfinite(a)) fail(where, "the expression's value is not a finite number");
+  };
+  for (;;) {
+    values.push_back(real_value(i));
+    const std::size_t where = i;
+    Op op;
+    const char c = at(i);
+    auto word = [&](std::string_view w) { return t_.substr(i, w.size()) == w; };
+    if (c == ']') {
+      op = Op::kClose, i += 1;
+    } else if (c == '*' && at(i + 1) == '*') {
+      op = Op::kPower, i += 2;
+    } else if (c == '*') {
+      op = Op::kTimes, i += 1;
+    } else if (c == '/') {
+      op = Op::kDivide, i += 1;
+    } else if (c == '+') {
+      op = Op::kPlus, i += 1;
+    } else if (c == '-') {
+      op = Op::kMinus, i += 1;
+    } else if (word("mod")) {
+      op = Op::kMod, i += 3;
+    } else if (word("and")) {
+      op = Op::kAnd, i += 3;
+    } else if (word("xor")) {
+      op = Op::kXor, i += 3;
+    } else if (word("or")) {
+      op = Op::kOr, i += 2;
+    } else if (word("eq")) {
+      op = Op::kEq, i += 2;
+    } else if (word("ne")) {
+      op = Op::kNe, i += 2;
+    } else if (word("gt")) {
+      op = Op::kGt, i += 2;
+    } else if (word("ge")) {
+      op = Op::kGe, i += 2;
+    } else if (word("lt")) {
+      op = Op::kLt, i += 2;
+    } else if (word("le")) {
+      op = Op::kLe, i += 2;
+    } else if (c == '\0' || c == '(' || c == ';') {
+      fail(open, "expression '[' is not closed; add ']'");
+    } else if (is_letter(c)) {
+      std::size_t e = i;
+      while (is_letter(at(e))) ++e;
+      fail(where, fmt::format("'{}' is not an operator; is a ']' missing before it?",
+                              t_.substr(i, e - i)));
+    } else {
+      fail(where, fmt::format("unknown operator '{}' in an expression", c));
+    }
+    while (!ops.empty() && precedence(op) <= precedence(ops.back().first)) {
+      apply(ops.back().first, ops.back().second);
+      ops.pop_back();
+    }
+    if (op == Op::kClose) break;
+    ops.emplace_back(op, where);
+  }
+  return values.back();
+}
+
+}  // namespace volmap::nc::flatten

@@ -1,0 +1,137 @@
+// Runs the parameters, expressions and O-word control flow of an RS274NGC
+// program as LinuxCNC does (its manual's "O Codes" chapter) and hands out
+// the flat program: one line per block the controller would execute, with
+// literal numbers. A line without parameters or expressions comes out as
+// written (each time a loop or a call runs it); O-word lines and lines
+// that only set parameters come out as nothing (their comments stay).
+//
+// The flattener evaluates a line just before the interpreter runs it, so
+// the system parameters it reads (#5420.., #5220, ...) are those of the
+// interpreter's state at that point, as on the controller.
+//
+// O-words: sub/endsub/call (numbered and named, arguments #1-#30, return
+// values in #<_value>), while/endwhile, do/while, repeat/endrepeat,
+// if/elseif/else/endif, break, continue, return; a subroutine not in the
+// program is read from NAME.ngc on the subroutine path (LinuxCNC's
+// SUBROUTINE_PATH). An O-word with a label that does not match, a call to
+// a subroutine nowhere to be found, an endless loop (more than
+// kMaxExecutedLines lines) are refused with file:line.
+//
+// Fanuc-style subprograms as LinuxCNC 2.9 runs them by default: M98 P<n>
+// [L<count>] runs the lines after a bare O<n> up to M99, sharing #1-#30
+// with the caller (no arguments, no return value). A bare O<n> reached in
+// the main program is a label (a Fanuc program number): written as it is.
+// M99 in the main program is refused (rs274 ends the program there, a
+// controller may loop).
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "gcode/flatten/expression.h"
+#include "gcode/flatten/parameters.h"
+
+namespace volmap::nc::flatten {
+
+/// Lines a flattened program may execute (loops and calls counted): a
+/// guard against an endless loop.
+inline constexpr long kMaxExecutedLines = 20'000'000;
+/// Nested subroutine calls: rs274 runs 9 and refuses the 10th ("Too many
+/// subroutine levels").
+inline constexpr int kMaxCallDepth = 9;
+
+/// One file's lines in memory.
+struct Source {
+  std::string file;
+  std::string data;
+  int first_line = 1;  ///< the number of data's first line in the file
+  std::vector<std::size_t> begins;  ///< each line's start in data; one more: the end
+  std::vector<bool> newline;        ///< the line ended with '\n'
+  std::size_t size() const { return newline.size(); }
+  std::string_view line(std::size_t k) const;
+};
+/// Splits `data` into lines (a '\r' before '\n' stays with its line).
+std::unique_ptr<Source> make_source(std::string file, std::string data, int first_line);
+
+struct FlatLine {
+  std::string_view text;  ///< valid until the next call
+  const std::string* file = nullptr;
+  int line = 0;
+  bool newline = true;
+  bool rewritten = false;  ///< evaluated: differs from the program's line
+  bool verbatim = false;   ///< a bare O<n> label: written as it is, not interpreted
+};
+
+class Flattener {
+ public:
+  Flattener(Parameters& parameters, std::vector<std::string> subroutine_path);
+
+  /// The program from the line where flattening begins to its end.
+  void start(std::unique_ptr<Source> main);
+  /// The next line the controller executes; false at the end (the end of
+  /// the main program, or the program has ended: `ended`).
+  bool next(FlatLine& out, bool ended);
+
+  long executed_lines() const { return executed_; }
+  long emitted_lines() const { return emitted_; }
+
+ private:
+  struct Position {
+    std::size_t source = 0, line = 0;
+  };
+  struct OWord {
+    std::string label;    ///< "100" or "<name>"
+    std::string keyword;  ///< sub, call, while, ...
+    std::size_t rest = 0;  ///< in the normalized line, after the keyword
+    std::size_t at = 0;    ///< where the O-word begins
+  };
+
+  struct Frame {
+    enum Kind { kCall, kWhile, kDo, kRepeat, kIf, kFanucCall } kind = kCall;
+    std::string label;
+    Position start;  ///< call: where to return; loops: their first line; if: the `if` line
+    Position target;  ///< M98: the label's line
+    long remaining = 0;
+    bool taken = false;
+  };
+
+  [[noreturn]] void fail(const Position& p, std::size_t norm_at, const std::string& msg) const;
+  /// Reads line p's O-word, if it has one.
+  bool read_oword(const Position& p, OWord& o) const;
+  /// The next O-word line at or after p in p's source with `label` and one
+  /// of `keywords`; fails naming `what` when there is none.
+  Position find(Position p, const std::string& label, std::initializer_list<std::string_view> keywords,
+                const Position& from, const char* what) const;
+  void execute_oword(const Position& p, const OWord& o);
+  void call(const Position& p, const OWord& o);
+  Position find_sub(const Position& p, const std::string& label);
+  /// A line of words: evaluated into line_ (true) or left as written (false).
+  bool evaluate(const Position& p);
+  /// M98 / M99 in the line evaluate() read: true when it was one (done).
+  bool fanuc_call(const Position& p);
+  double condition(const Position& p, const OWord& o) const;
+
+  Parameters& params_;
+  std::vector<std::string> path_;
+  std::vector<std::unique_ptr<Source>> sources_;
+  std::map<std::string, Position> subs_;  ///< label -> its `sub` line
+  std::vector<Frame> frames_;
+  Position pc_;
+  mutable NormalizedLine norm_;  ///< the line last read (read_oword() reads into it)
+  std::string line_;
+  struct Token {
+    std::size_t begin = 0, end = 0;  ///< in the normalized line
+    char letter = 0;                  ///< a word's (lower case), or 0
+    bool evaluated = false;
+    double value = 0.0;
+  };
+  std::vector<Token> tokens_;  ///< evaluate()'s
+  long executed_ = 0, emitted_ = 0;
+  bool break_leaked_ = false, continue_leaked_ = false;  ///< execute_oword()'s LinuxCNC bugs
+};
+
+}  // namespace volmap::nc::flatten

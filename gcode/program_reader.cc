@@ -1,0 +1,235 @@
+#include "gcode/program_reader.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "gcode/nc_interpreter.h"
+
+namespace volmap::nc {
+namespace {
+
+constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
+
+std::string_view trimmed(std::string_view t) {
+  while (!t.empty() && (t.front() == ' ' || t.front() == '\t')) t.remove_prefix(1);
+  while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r'))
+    t.remove_suffix(1);
+  return t;
+}
+
+bool is_percent_line(std::string_view t) {
+  t = trimmed(t);
+  return !t.empty() && t.front() == '%';
+}
+
+}  // namespace
+
+bool needs_flattening(std::string_view t) {
+  // An O-word begins the block (after '/' and an N number).
+  std::size_t i = 0;
+  auto skip = [&] {
+    while (i < t.size() && (t[i] == ' ' || t[i] == '\t')) ++i;
+  };
+  skip();
+  if (i < t.size() && t[i] == '/') ++i, skip();
+  if (i < t.size() && (t[i] == 'N' || t[i] == 'n')) {
+    ++i;
+    while (i < t.size() && ((t[i] >= '0' && t[i] <= '9') || t[i] == ' ' || t[i] == '\t' ||
+                            t[i] == '.'))
+      ++i;
+  }
+  if (i < t.size() && (t[i] == 'O' || t[i] == 'o')) return true;
+  // M98 / M99 (Fanuc-style subprograms, which LinuxCNC runs).
+  for (const char letter : {'M', 'm'}) {
+    std::size_t at = 0;
+    while (const void* m = std::memchr(t.data() + at, letter, t.size() - at)) {
+      std::size_t k = static_cast<std::size_t>(static_cast<const char*>(m) - t.data()) + 1;
+      at = k;
+      while (k < t.size() && (t[k] == ' ' || t[k] == '\t' || t[k] == '0')) ++k;
+      if ((t.substr(k, 2) == "98" || t.substr(k, 2) == "99") &&
+          (k + 2 >= t.size() || t[k + 2] < '0' || t[k + 2] > '9'))
+        return true;
+    }
+  }
+  const void* hash = std::memchr(t.data(), '#', t.size());
+  const void* bracket = std::memchr(t.data(), '[', t.size());
+  if (!hash && !bracket) return false;
+  // Outside comments only.
+  char close = 0;
+  for (char c : t) {
+    if (close) {
+      if (c == close) close = 0;
+    } else if (c == '(') {
+      close = ')';
+    } else if (c == ';') {
+      return false;
+    } else if (c == '#' || c == '[') {
+      return true;
+    }
+  }
+  return false;
+}
+
+ProgramReader::ProgramReader(std::istream& in, std::string file, const Interpreter& interp,
+                             std::vector<std::string> subroutine_path)
+    : in_(in), file_(std::move(file)), interp_(interp), path_(std::move(subroutine_path)),
+      buf_(std::size_t{1} << 16) {}
+
+ProgramReader::~ProgramReader() = default;
+
+void ProgramReader::fill() {
+  const std::size_t rest = end_ - begin_;
+  std::memmove(buf_.data(), buf_.data() + begin_, rest);
+  begin_ = 0;
+  end_ = rest;
+  if (end_ == buf_.size()) buf_.resize(2 * buf_.size());
+  in_.read(buf_.data() + end_, static_cast<std::streamsize>(buf_.size() - end_));
+  const auto got = static_cast<std::size_t>(in_.gcount());
+  end_ += got;
+  if (got == 0) eof_ = true;
+}
+
+bool ProgramReader::physical(std::string_view& text, bool& newline) {
+  // Lines out of a large buffer (getline's per-line work and copies
+  // avoided); the buffer grows only to hold the longest line.
+  for (;;) {
+    const char* nl =
+        static_cast<const char*>(std::memchr(buf_.data() + begin_, '\n', end_ - begin_));
+    if (nl) {
+      const auto at = static_cast<std::size_t>(nl - buf_.data());
+      text = std::string_view(buf_.data() + begin_, at - begin_);
+      newline = true;
+      begin_ = at + 1;
+      ++number_;
+      return true;
+    }
+    if (eof_) {
+      if (begin_ == end_) return false;
+      text = std::string_view(buf_.data() + begin_, end_ - begin_);
+      newline = false;
+      begin_ = end_;
+      ++number_;
+      return true;
+    }
+    fill();
+  }
+}
+
+void ProgramReader::find_leader() {
+  // Leader: text before a first '%' that is not the first line. Looked for
+  // in the first piece read (64 KiB): a tape's leader is a few lines.
+  while (!eof_ && end_ < buf_.size()) fill();
+  std::string_view head(buf_.data() + begin_, end_ - begin_);
+  if (head.starts_with(kByteOrderMark)) {
+    // Not part of the program: LinuxCNC refuses it ("Bad character
+    // '\357' used"), so it is not written out either (the CLI says so).
+    report_.byte_order_mark = true;
+    begin_ += kByteOrderMark.size();
+    head.remove_prefix(kByteOrderMark.size());
+  }
+  int lines = 0;
+  bool text_before = false;
+  std::size_t b = 0;
+  while (b < head.size()) {
+    std::size_t e = head.find('\n', b);
+    if (e == std::string_view::npos) {
+      if (!eof_) return;  // a line longer than the piece: no leader
+      e = head.size();
+    }
+    const std::string_view l = head.substr(b, e - b);
+    if (is_percent_line(l)) {
+      if (text_before) leader_left_ = report_.leader_lines = lines;
+      return;
+    }
+    text_before = text_before || !trimmed(l).empty();
+    ++lines;
+    b = e + 1;
+  }
+}
+
+void ProgramReader::start_flattening(std::string_view first, bool newline) {
+  // The rest of the program in memory: loops and calls go back and forth.
+  std::string data(first);
+  if (newline) data += '\n';
+  data.append(buf_.data() + begin_, end_ - begin_);
+  begin_ = end_;
+  while (!eof_) {
+    const std::size_t at = data.size();
+    data.resize(at + (std::size_t{1} << 20));
+    in_.read(data.data() + at, static_cast<std::streamsize>(std::size_t{1} << 20));
+    data.resize(at + static_cast<std::size_t>(in_.gcount()));
+    if (in_.gcount() == 0) eof_ = true;
+  }
+  // What follows a closing '%' is not run: set aside, handed out verbatim.
+  if (opened_) {
+    std::size_t b = first.size() + (newline ? 1 : 0);  // (the first line is not a '%' line)
+    while (b < data.size()) {
+      std::size_t e = data.find('\n', b);
+      e = e == std::string::npos ? data.size() : e + 1;
+      if (is_percent_line(std::string_view(data).substr(b, e - b))) {
+        // The closing '%' with it: the flat program may end earlier (at
+        // M2), and the tape still ends with its '%'.
+        const auto newlines = std::count(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(b), '\n');
+        trailer_ = flatten::make_source(file_, data.substr(b), number_ + static_cast<int>(newlines));
+        report_.trailer_lines = static_cast<int>(trailer_->size()) - 1;
+        data.resize(b);
+        break;
+      }
+      b = e;
+    }
+  }
+  report_.flattened_from = number_;
+  params_ = std::make_unique<flatten::Parameters>(interp_);
+  for (const auto& [n, v] : interp_.setup().parameters) params_->load(n, v);
+  flat_ = std::make_unique<flatten::Flattener>(*params_, path_);
+  auto source = flatten::make_source(file_, std::move(data), number_);
+  report_.flat_source_lines = static_cast<long>(source->size());
+  flat_->start(std::move(source));
+}
+
+bool ProgramReader::next(ProgramLine& out) {
+  if (!started_) {
+    started_ = true;
+    find_leader();
+  }
+  if (flat_) {
+    flatten::FlatLine f;
+    if (!flat_->next(f, interp_.state().ended)) {
+      report_.flat_blocks = flat_->emitted_lines();
+      if (!trailer_ || trailer_next_ >= trailer_->size()) return false;
+      const std::size_t k = trailer_next_++;
+      out = ProgramLine{trailer_->line(k), &file_, trailer_->first_line + static_cast<int>(k),
+                        trailer_->newline[k], k > 0, false};
+      return true;
+    }
+    report_.flat_blocks = flat_->emitted_lines();
+    out = ProgramLine{f.text, f.file, f.line, f.newline, f.verbatim, f.rewritten};
+    return true;
+  }
+  std::string_view text;
+  bool newline = false;
+  if (!physical(text, newline)) return false;
+  out = ProgramLine{text, &file_, number_, newline, false, false};
+  if (leader_left_ > 0) {
+    --leader_left_;
+    out.verbatim = true;
+    return true;
+  }
+  if (closed_) {
+    ++report_.trailer_lines;
+    out.verbatim = true;
+    return true;
+  }
+  if (is_percent_line(text)) {
+    if (opened_) closed_ = true;
+    opened_ = true;
+    return true;
+  }
+  if (needs_flattening(text) && !interp_.state().ended) {
+    start_flattening(text, newline);
+    return next(out);
+  }
+  return true;
+}
+
+}  // namespace volmap::nc

@@ -1,0 +1,87 @@
+// An NC program's lines as the controller runs them, for the interpreter
+// and the post-processors: read in large pieces (a program of any size
+// streams through in constant memory), the tape's frame set aside (a UTF-8
+// byte-order mark, dropped; leader text before the first '%' and what
+// follows the closing '%', handed out verbatim), and, from the first line that uses parameters, expressions
+// or O-word control flow on, the program flattened (flatten/flattener.h).
+//
+// Every line of the file comes out once, in order, until flattening
+// begins; each is either a block to interpret or verbatim text to write
+// as it is (not run by the controller, not interpreted). A flat program
+// never pays for what it does not use: one look per line for '#', '[' and
+// an O-word.
+#pragma once
+
+#include <istream>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "gcode/flatten/flattener.h"
+#include "gcode/flatten/parameters.h"
+
+namespace volmap::nc {
+
+class Interpreter;
+
+struct ProgramLine {
+  std::string_view text;  ///< without its line ending ('\r' of CRLF kept); valid until next()
+  const std::string* file = nullptr;
+  int line = 0;              ///< 1-based, in `file`
+  bool newline = true;       ///< a '\n' followed it
+  bool verbatim = false;     ///< not run by the controller: write it as it is, do not interpret
+  bool rewritten = false;    ///< evaluated by the flattener
+};
+
+struct ReadReport {
+  bool byte_order_mark = false;
+  int leader_lines = 0;   ///< lines before the first '%' (tape leader)
+  int trailer_lines = 0;  ///< lines after the closing '%'
+  int flattened_from = 0;  ///< the line where flattening began, 0 if it did not
+  long flat_blocks = 0;    ///< lines the flattened part came out as
+  long flat_source_lines = 0;  ///< lines of the program it was flattened from
+};
+
+class ProgramReader {
+ public:
+  /// `interp`: the interpreter the lines go to (the system parameters are
+  /// its state). `subroutine_path`: where O<name> call finds NAME.ngc.
+  ProgramReader(std::istream& in, std::string file, const Interpreter& interp,
+                std::vector<std::string> subroutine_path);
+  ~ProgramReader();
+
+  bool next(ProgramLine& out);
+  const ReadReport& report() const { return report_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  /// The next physical line from the stream; false at its end.
+  bool physical(std::string_view& text, bool& newline);
+  void fill();
+  void find_leader();
+  void start_flattening(std::string_view first, bool newline);
+
+  std::istream& in_;
+  std::string file_;
+  const Interpreter& interp_;
+  std::vector<std::string> path_;
+  std::vector<char> buf_;
+  std::size_t begin_ = 0, end_ = 0;
+  bool eof_ = false;
+  int number_ = 0;
+  bool started_ = false;
+  int leader_left_ = 0;
+  bool opened_ = false, closed_ = false;  ///< '%' seen: the first, the closing one
+  std::unique_ptr<flatten::Parameters> params_;
+  std::unique_ptr<flatten::Flattener> flat_;
+  std::unique_ptr<flatten::Source> trailer_;  ///< after the closing '%' of a flattened program
+  std::size_t trailer_next_ = 0;
+  ReadReport report_;
+};
+
+/// Does this line use parameters, expressions or an O-word (outside its
+/// comments)? Then it and all that follow are flattened.
+bool needs_flattening(std::string_view text);
+
+}  // namespace volmap::nc
