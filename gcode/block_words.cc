@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "core/common/input_error.h"
+#include "gcode/g_codes.h"
 
 namespace volmap::nc {
 namespace {
@@ -27,9 +28,20 @@ void collect_g_word(const Block& b, const std::string& file, const Word& w, Bloc
         file, b, &w,
         fmt::format("G{} is not supported: {}", b.text.substr(w.begin + 1, w.end - w.begin - 1),
                     why ? why : "unknown G code"));
-  if (out.g_mask & (1u << grp))
+  if (out.g_mask & (1u << grp)) {
+    // LinuxCNC reads G80 beside another motion code as that code alone, in
+    // either order (`G0 X1 G80`, the safety line `G00 G17 G21 G40 G49 G80
+    // G90` of many CAM posts; checked with rs274): the other code ends any
+    // canned cycle anyway.
+    const Word* before = out.g[static_cast<size_t>(grp)];
+    if (grp == kMotion && w.code10 == kG80CycleCancel && before->code10 != kG80CycleCancel) return;
+    if (grp == kMotion && before->code10 == kG80CycleCancel && w.code10 != kG80CycleCancel) {
+      out.g[static_cast<size_t>(grp)] = &w;
+      return;
+    }
     refuse_block(file, b, &w,
                  "two G codes of the same modal group in one block; put them in separate blocks");
+  }
   // (A second non-modal code failed just above: the group's bit was set.)
   if (grp == kNonModal && (out.g_mask & (1u << kNonModal)) && out.g[kNonModal]->code10 != w.code10)
     refuse_block(file, b, &w, "two non-modal G codes in one block; split the block");

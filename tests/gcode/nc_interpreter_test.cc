@@ -201,3 +201,35 @@ TEST(NcInterpreter, PolarWordsNeedG17BeforeTheBlock) {
 
 }  // namespace
 }  // namespace volmap
+
+namespace volmap {
+namespace {
+
+// rs274 (LinuxCNC 2.9) reads G80 beside another motion code as that code
+// alone, in either order; the other code stays modal. Its canonical calls
+// for this program: the hole at (1,1), then traverses to X5, a feed to X7,
+// the hole again, traverses to Y3, X9 (G0 still modal), X11. (rs274 also
+// emits a zero-length traverse for `G0 G80` without axis words, which
+// moves nothing; volmap's interpreter has no motion there.)
+TEST(NcInterpreter, G80BesideAnotherMotionCodeIsThatCode) {
+  nc::Interpreter in(nc::ProgramSetup{}, "g80.ngc");
+  nc::BlockEffect fx;
+  const char* lines[] = {"G21 G90 G17",      "G0 X0 Y0 Z5",     "G81 X1 Y1 Z-1 R1 F100",
+                         "G0 X5 G80",        "G80 G1 X7 F100",  "G81 X1 Y1 Z-1 R1",
+                         "G80 G0 Y3",        "X9",              "G0 G80",
+                         "X11"};
+  std::vector<std::pair<nc::MotionKind, double>> got;
+  for (int k = 0; k < 10; ++k) {
+    in.execute(nc::lex_block(lines[k], k + 1, "g80.ngc"), fx);
+    if (fx.has_motion) got.emplace_back(fx.motion.kind, fx.motion.end_mm.x());
+  }
+  using K = nc::MotionKind;
+  const std::vector<std::pair<nc::MotionKind, double>> want = {
+      {K::kRapid, 0}, {K::kCycle, 1}, {K::kRapid, 5}, {K::kLinear, 7}, {K::kCycle, 1},
+      {K::kRapid, 1}, {K::kRapid, 9}, {K::kRapid, 11}};
+  EXPECT_EQ(got, want);
+  EXPECT_THROW(in.execute(nc::lex_block("G0 G1 X1", 11, "g80.ngc"), fx), InputError);
+}
+
+}  // namespace
+}  // namespace volmap
