@@ -182,6 +182,7 @@ void ProgramReader::start_flattening(std::string_view first, bool newline) {
   params_ = std::make_unique<flatten::Parameters>(interp_);
   for (const auto& [n, v] : interp_.setup().parameters) params_->load(n, v);
   flat_ = std::make_unique<flatten::Flattener>(*params_, path_);
+  flat_->set_max_executed_lines(max_executed_);
   auto source = flatten::make_source(file_, std::move(data), number_);
   report_.flat_source_lines = static_cast<long>(source->size());
   flat_->start(std::move(source));

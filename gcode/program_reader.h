@@ -52,6 +52,8 @@ class ProgramReader {
   ~ProgramReader();
 
   bool next(ProgramLine& out);
+  /// The flattener's endless-loop guard (flatten::kMaxExecutedLines).
+  void set_max_executed_lines(long n) { max_executed_ = n; }
   const ReadReport& report() const { return report_; }
   const std::string& file() const { return file_; }
 
@@ -78,6 +80,7 @@ class ProgramReader {
   std::unique_ptr<flatten::Source> trailer_;  ///< after the closing '%' of a flattened program
   std::size_t trailer_next_ = 0;
   ReadReport report_;
+  long max_executed_ = flatten::kMaxExecutedLines;
 };
 
 /// Does this line use parameters, expressions or an O-word (outside its

@@ -600,11 +600,11 @@ bool Flattener::next(FlatLine& out, bool ended) {
            fmt::format("O{} is not closed: the file ends before its {}; add it", f.label,
                        kEnd[f.kind]));
     }
-    if (++executed_ > kMaxExecutedLines) {
+    if (++executed_ > max_executed_) {
       fail(pc_, static_cast<std::size_t>(-1),
            fmt::format("the program runs more than {} lines; an endless loop? (volmap flattens "
                        "loops before posting)",
-                       kMaxExecutedLines));
+                       max_executed_));
     }
     const Position p = pc_;
     ++pc_.line;

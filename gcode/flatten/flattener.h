@@ -77,6 +77,8 @@ class Flattener {
   bool next(FlatLine& out, bool ended);
 
   long executed_lines() const { return executed_; }
+  /// The endless-loop guard (kMaxExecutedLines by default).
+  void set_max_executed_lines(long n) { max_executed_ = n; }
   long emitted_lines() const { return emitted_; }
 
  private:
@@ -131,6 +133,7 @@ class Flattener {
   };
   std::vector<Token> tokens_;  ///< evaluate()'s
   long executed_ = 0, emitted_ = 0;
+  long max_executed_ = kMaxExecutedLines;
   bool break_leaked_ = false, continue_leaked_ = false;  ///< execute_oword()'s LinuxCNC bugs
 };
 

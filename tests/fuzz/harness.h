@@ -25,6 +25,7 @@
 #include "core/model/machine_json.h"
 #include "gcode/nc_block.h"
 #include "gcode/nc_interpreter.h"
+#include "gcode/program_reader.h"
 #include "postproc/three_axis/post_program.h"
 
 namespace volmap::fuzz {
@@ -83,6 +84,35 @@ inline void nc_reader(std::string_view program) {
 /// limit). The program is posted with and without the shortcut of plain
 /// lines: both must refuse it with the same InputError or write the same
 /// bytes and count the same.
+// Programs with parameters, expressions and O-word control flow: the
+// program reader flattens them into the interpreter (a bounded number of
+// executed lines: an endless loop is refused, not waited for).
+inline void nc_flatten(std::string_view program) {
+  nc::ProgramSetup setup;
+  setup.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
+  setup.initial_position_mm = Eigen::Vector3d(250, 200, 300);
+  setup.tool_length_mm[1] = 50.0;
+  nc::Interpreter interp(setup, "fuzz.ngc");
+  std::istringstream in{std::string(program)};
+  nc::ProgramReader reader(in, "fuzz.ngc", interp, {});
+  reader.set_max_executed_lines(20000);
+  nc::ProgramLine l;
+  nc::Block b;
+  nc::BlockEffect fx;
+  try {
+    while (reader.next(l)) {
+      if (l.verbatim) continue;
+      std::string_view text = l.text;
+      if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+      nc::lex_block_into(text, l.line, *l.file, b);
+      b.evaluated = l.rewritten;
+      interp.execute(b, fx);
+      if (fx.has_motion) require(fx.motion.end_mm.allFinite());
+    }
+  } catch (const InputError&) {
+  }
+}
+
 inline void post(std::string_view input) {
   if (input.empty()) return;
   static const Machine machine =
