@@ -78,9 +78,10 @@ void print_read_notes(const std::string& in_name, const nc::ReadReport& r) {
         in_name, r.flattened_from, r.flat_source_lines, r.flat_source_lines == 1 ? "" : "s",
         r.flat_blocks, r.flat_blocks == 1 ? "" : "s");
   if (r.trailer_lines > 0)
-    std::cerr << fmt::format("note: {}: {} line{} after the closing '%' written as they are, not "
-                             "run\n",
-                             in_name, r.trailer_lines, r.trailer_lines > 1 ? "s" : "");
+    std::cerr << fmt::format(
+        "note: {}: {} line{} after the closing '%' written as they are, not "
+        "run\n",
+        in_name, r.trailer_lines, r.trailer_lines > 1 ? "s" : "");
 }
 
 }  // namespace volmap::cli

@@ -34,8 +34,8 @@ bool needs_flattening(std::string_view t) {
   if (i < t.size() && t[i] == '/') ++i, skip();
   if (i < t.size() && (t[i] == 'N' || t[i] == 'n')) {
     ++i;
-    while (i < t.size() && ((t[i] >= '0' && t[i] <= '9') || t[i] == ' ' || t[i] == '\t' ||
-                            t[i] == '.'))
+    while (i < t.size() &&
+           ((t[i] >= '0' && t[i] <= '9') || t[i] == ' ' || t[i] == '\t' || t[i] == '.'))
       ++i;
   }
   if (i < t.size() && (t[i] == 'O' || t[i] == 'o')) return true;
@@ -72,7 +72,10 @@ bool needs_flattening(std::string_view t) {
 
 ProgramReader::ProgramReader(std::istream& in, std::string file, const Interpreter& interp,
                              std::vector<std::string> subroutine_path)
-    : in_(in), file_(std::move(file)), interp_(interp), path_(std::move(subroutine_path)),
+    : in_(in),
+      file_(std::move(file)),
+      interp_(interp),
+      path_(std::move(subroutine_path)),
       buf_(std::size_t{1} << 16) {}
 
 ProgramReader::~ProgramReader() = default;
@@ -169,8 +172,10 @@ void ProgramReader::start_flattening(std::string_view first, bool newline) {
       if (is_percent_line(std::string_view(data).substr(b, e - b))) {
         // The closing '%' with it: the flat program may end earlier (at
         // M2), and the tape still ends with its '%'.
-        const auto newlines = std::count(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(b), '\n');
-        trailer_ = flatten::make_source(file_, data.substr(b), number_ + static_cast<int>(newlines));
+        const auto newlines =
+            std::count(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(b), '\n');
+        trailer_ =
+            flatten::make_source(file_, data.substr(b), number_ + static_cast<int>(newlines));
         report_.trailer_lines = static_cast<int>(trailer_->size()) - 1;
         data.resize(b);
         break;
@@ -199,8 +204,8 @@ bool ProgramReader::next(ProgramLine& out) {
       report_.flat_blocks = flat_->emitted_lines();
       if (!trailer_ || trailer_next_ >= trailer_->size()) return false;
       const std::size_t k = trailer_next_++;
-      out = ProgramLine{trailer_->line(k), &file_, trailer_->first_line + static_cast<int>(k),
-                        trailer_->newline[k], k > 0, false};
+      out = ProgramLine{trailer_->line(k),    &file_, trailer_->first_line + static_cast<int>(k),
+                        trailer_->newline[k], k > 0,  false};
       return true;
     }
     report_.flat_blocks = flat_->emitted_lines();

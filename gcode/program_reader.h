@@ -2,8 +2,8 @@
 // and the post-processors: read in large pieces (a program of any size
 // streams through in constant memory), the tape's frame set aside (a UTF-8
 // byte-order mark, dropped; leader text before the first '%' and what
-// follows the closing '%', handed out verbatim), and, from the first line that uses parameters, expressions
-// or O-word control flow on, the program flattened (flatten/flattener.h).
+// follows the closing '%', handed out verbatim), and, from the first line that uses parameters,
+// expressions or O-word control flow on, the program flattened (flatten/flattener.h).
 //
 // Every line of the file comes out once, in order, until flattening
 // begins; each is either a block to interpret or verbatim text to write
@@ -28,18 +28,18 @@ class Interpreter;
 struct ProgramLine {
   std::string_view text;  ///< without its line ending ('\r' of CRLF kept); valid until next()
   const std::string* file = nullptr;
-  int line = 0;              ///< 1-based, in `file`
-  bool newline = true;       ///< a '\n' followed it
-  bool verbatim = false;     ///< not run by the controller: write it as it is, do not interpret
-  bool rewritten = false;    ///< evaluated by the flattener
+  int line = 0;            ///< 1-based, in `file`
+  bool newline = true;     ///< a '\n' followed it
+  bool verbatim = false;   ///< not run by the controller: write it as it is, do not interpret
+  bool rewritten = false;  ///< evaluated by the flattener
 };
 
 struct ReadReport {
   bool byte_order_mark = false;
-  int leader_lines = 0;   ///< lines before the first '%' (tape leader)
-  int trailer_lines = 0;  ///< lines after the closing '%'
-  int flattened_from = 0;  ///< the line where flattening began, 0 if it did not
-  long flat_blocks = 0;    ///< lines the flattened part came out as
+  int leader_lines = 0;        ///< lines before the first '%' (tape leader)
+  int trailer_lines = 0;       ///< lines after the closing '%'
+  int flattened_from = 0;      ///< the line where flattening began, 0 if it did not
+  long flat_blocks = 0;        ///< lines the flattened part came out as
   long flat_source_lines = 0;  ///< lines of the program it was flattened from
 };
 

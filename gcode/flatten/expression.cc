@@ -15,22 +15,118 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 /// integer value must be.
 constexpr double kToleranceEqual = 0.0001;
 
-enum class Op { kPower, kTimes, kDivide, kMod, kPlus, kMinus, kEq, kNe, kGt, kGe, kLt, kLe,
-                kAnd, kOr, kXor, kClose };
+}  // namespace
+
+// (Declared in the header, for read_operator().)
+enum class Op {
+  kPower,
+  kTimes,
+  kDivide,
+  kMod,
+  kPlus,
+  kMinus,
+  kEq,
+  kNe,
+  kGt,
+  kGe,
+  kLt,
+  kLe,
+  kAnd,
+  kOr,
+  kXor,
+  kClose
+};
+
+namespace {
 
 int precedence(Op op) {
   switch (op) {
-    case Op::kPower: return 6;
-    case Op::kTimes: case Op::kDivide: case Op::kMod: return 5;
-    case Op::kPlus: case Op::kMinus: return 4;
-    case Op::kEq: case Op::kNe: case Op::kGt: case Op::kGe: case Op::kLt: case Op::kLe: return 3;
-    case Op::kAnd: case Op::kOr: case Op::kXor: return 2;
-    case Op::kClose: return 1;
+    case Op::kPower:
+      return 6;
+    case Op::kTimes:
+    case Op::kDivide:
+    case Op::kMod:
+      return 5;
+    case Op::kPlus:
+    case Op::kMinus:
+      return 4;
+    case Op::kEq:
+    case Op::kNe:
+    case Op::kGt:
+    case Op::kGe:
+    case Op::kLt:
+    case Op::kLe:
+      return 3;
+    case Op::kAnd:
+    case Op::kOr:
+    case Op::kXor:
+      return 2;
+    case Op::kClose:
+      return 1;
   }
   return 1;
 }
 
 bool is_letter(char c) { return c >= 'a' && c <= 'z'; }
+
+// a = a op b, as LinuxCNC's execute_binary; the reason it is refused, or
+// nullptr.
+const char* apply(Op op, double& a, double b) {
+  switch (op) {
+    case Op::kPower:
+      if (a < 0.0 && std::floor(b) != b) return "a negative number to a non-integer power";
+      a = std::pow(a, b);
+      break;
+    case Op::kTimes:
+      a *= b;
+      break;
+    case Op::kDivide:
+      if (b == 0.0) return "division by zero";
+      a /= b;
+      break;
+    case Op::kMod:
+      if (b == 0.0) return "MOD by zero";
+      a = std::fmod(a, b);
+      if (a < 0.0) a += std::abs(b);
+      break;
+    case Op::kPlus:
+      a += b;
+      break;
+    case Op::kMinus:
+      a -= b;
+      break;
+    case Op::kEq:
+      a = std::abs(a - b) < kToleranceEqual ? 1.0 : 0.0;
+      break;
+    case Op::kNe:
+      a = std::abs(a - b) >= kToleranceEqual ? 1.0 : 0.0;
+      break;
+    case Op::kGt:
+      a = a > b ? 1.0 : 0.0;
+      break;
+    case Op::kGe:
+      a = a >= b ? 1.0 : 0.0;
+      break;
+    case Op::kLt:
+      a = a < b ? 1.0 : 0.0;
+      break;
+    case Op::kLe:
+      a = a <= b ? 1.0 : 0.0;
+      break;
+    case Op::kAnd:
+      a = (a != 0.0 && b != 0.0) ? 1.0 : 0.0;
+      break;
+    case Op::kOr:
+      a = (a != 0.0 || b != 0.0) ? 1.0 : 0.0;
+      break;
+    case Op::kXor:
+      a = ((a != 0.0) != (b != 0.0)) ? 1.0 : 0.0;
+      break;
+    case Op::kClose:
+      break;
+  }
+  return std::isfinite(a) ? nullptr : "the expression's value is not a finite number";
+}
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
 
 }  // namespace
@@ -63,8 +159,10 @@ bool ValueReader::is_literal(std::string_view text) {
   if (k < text.size() && (text[k] == '+' || text[k] == '-')) ++k;
   bool digits = false;
   for (; k < text.size(); ++k) {
-    if (is_digit(text[k])) digits = true;
-    else if (text[k] != '.') return false;
+    if (is_digit(text[k]))
+      digits = true;
+    else if (text[k] != '.')
+      return false;
   }
   return digits;
 }
@@ -167,8 +265,7 @@ double ValueReader::unary(std::size_t& i) const {
   const std::string_view fn = t_.substr(i, e - i);
   i = e;
   if (fn == "exists") {
-    if (at(i) != '[' || at(i + 1) != '#')
-      fail(begin, "EXISTS takes a parameter: EXISTS[#<name>]");
+    if (at(i) != '[' || at(i + 1) != '#') fail(begin, "EXISTS takes a parameter: EXISTS[#<name>]");
     i += 2;
     bool exists = true;  // a numbered parameter always exists (rs274)
     if (at(i) == '<') {
@@ -177,8 +274,8 @@ double ValueReader::unary(std::size_t& i) const {
       const std::size_t number_at = i;
       const int n = integer_value(i);
       if (n < 1 || n >= kParameterCount)
-        fail(number_at, fmt::format("parameter number {} is out of range (1 to {})", n,
-                                    kParameterCount - 1));
+        fail(number_at,
+             fmt::format("parameter number {} is out of range (1 to {})", n, kParameterCount - 1));
     }
     if (at(i) != ']') fail(i, "EXISTS[#...] is not closed; add ']'");
     ++i;
@@ -196,8 +293,7 @@ double ValueReader::unary(std::size_t& i) const {
   if (at(i) != '[') fail(i, fmt::format("{} needs its argument in [ ]", fn));
   const double x = expression(i);
   if (fn == "atan") {
-    if (at(i) != '/' || at(i + 1) != '[')
-      fail(i, "ATAN takes two arguments: ATAN[y]/[x]");
+    if (at(i) != '/' || at(i + 1) != '[') fail(i, "ATAN takes two arguments: ATAN[y]/[x]");
     ++i;
     const double x2 = expression(i);
     return std::atan2(x, x2) * kDegPerRad;
@@ -230,97 +326,43 @@ double ValueReader::expression(std::size_t& i) const {
   const std::size_t open = i++;
   std::vector<double> values;
   std::vector<std::pair<Op, std::size_t>> ops;
-  auto apply = [&](Op op, std::size_t where) {
-    const double b = values.back();
-    values.pop_back();
-    double& a = values.back();
-    switch (op) {
-      case Op::kPower:
-        if (a < 0.0 && std::floor(b) != b)
-          fail(where, fmt::format("attempt to raise {} to the non-integer power {}", a, b));
-        a = std::pow(a, b);
-        break;
-      case Op::kTimes: a *= b; break;
-      case Op::kDivide:
-        if (b == 0.0) fail(where, "division by zero");
-        a /= b;
-        break;
-      case Op::kMod:
-        if (b == 0.0) fail(where, "MOD by zero");
-        a = std::fmod(a, b);
-        if (a < 0.0) a += std::abs(b);
-        break;
-      case Op::kPlus: a += b; break;
-      case Op::kMinus: a -= b; break;
-      case Op::kEq: a = std::abs(a - b) < kToleranceEqual ? 1.0 : 0.0; break;
-      case Op::kNe: a = std::abs(a - b) >= kToleranceEqual ? 1.0 : 0.0; break;
-      case Op::kGt: a = a > b ? 1.0 : 0.0; break;
-      case Op::kGe: a = a >= b ? 1.0 : 0.0; break;
-      case Op::kLt: a = a < b ? 1.0 : 0.0; break;
-      case Op::kLe: a = a <= b ? 1.0 : 0.0; break;
-      case Op::kAnd: a = (a != 0.0 && b != 0.0) ? 1.0 : 0.0; break;
-      case Op::kOr: a = (a != 0.0 || b != 0.0) ? 1.0 : 0.0; break;
-      case Op::kXor: a = ((a != 0.0) != (b != 0.0)) ? 1.0 : 0.0; break;
-      case Op::kClose: break;
-    }
-    if (!std::isfinite(a)) fail(where, "the expression's value is not a finite number");
-  };
   for (;;) {
     values.push_back(real_value(i));
     const std::size_t where = i;
-    Op op;
-    const char c = at(i);
-    auto word = [&](std::string_view w) { return t_.substr(i, w.size()) == w; };
-    if (c == ']') {
-      op = Op::kClose, i += 1;
-    } else if (c == '*' && at(i + 1) == '*') {
-      op = Op::kPower, i += 2;
-    } else if (c == '*') {
-      op = Op::kTimes, i += 1;
-    } else if (c == '/') {
-      op = Op::kDivide, i += 1;
-    } else if (c == '+') {
-      op = Op::kPlus, i += 1;
-    } else if (c == '-') {
-      op = Op::kMinus, i += 1;
-    } else if (word("mod")) {
-      op = Op::kMod, i += 3;
-    } else if (word("and")) {
-      op = Op::kAnd, i += 3;
-    } else if (word("xor")) {
-      op = Op::kXor, i += 3;
-    } else if (word("or")) {
-      op = Op::kOr, i += 2;
-    } else if (word("eq")) {
-      op = Op::kEq, i += 2;
-    } else if (word("ne")) {
-      op = Op::kNe, i += 2;
-    } else if (word("gt")) {
-      op = Op::kGt, i += 2;
-    } else if (word("ge")) {
-      op = Op::kGe, i += 2;
-    } else if (word("lt")) {
-      op = Op::kLt, i += 2;
-    } else if (word("le")) {
-      op = Op::kLe, i += 2;
-    } else if (c == '\0' || c == '(' || c == ';') {
-      fail(open, "expression '[' is not closed; add ']'");
-    } else if (is_letter(c)) {
-      std::size_t e = i;
-      while (is_letter(at(e))) ++e;
-      fail(where, fmt::format("'{}' is not an operator; is a ']' missing before it?",
-                              t_.substr(i, e - i)));
-    } else {
-      fail(where, fmt::format("unknown operator '{}' in an expression", c));
-    }
+    const Op op = read_operator(i, open);
     while (!ops.empty() && precedence(op) <= precedence(ops.back().first)) {
-      apply(ops.back().first, ops.back().second);
+      const double b = values.back();
+      values.pop_back();
+      if (const char* why = apply(ops.back().first, values.back(), b)) fail(ops.back().second, why);
       ops.pop_back();
     }
     if (op == Op::kClose) break;
     ops.emplace_back(op, where);
   }
   return values.back();
+}
+
+Op ValueReader::read_operator(std::size_t& i, std::size_t open) const {
+  // Longest first where one is the start of another (** before *).
+  static constexpr std::pair<std::string_view, Op> kOperators[] = {
+      {"]", Op::kClose}, {"**", Op::kPower}, {"*", Op::kTimes}, {"/", Op::kDivide},
+      {"+", Op::kPlus},  {"-", Op::kMinus},  {"mod", Op::kMod}, {"and", Op::kAnd},
+      {"xor", Op::kXor}, {"or", Op::kOr},    {"eq", Op::kEq},   {"ne", Op::kNe},
+      {"gt", Op::kGt},   {"ge", Op::kGe},    {"lt", Op::kLt},   {"le", Op::kLe}};
+  for (const auto& [text, op] : kOperators)
+    if (t_.substr(i, text.size()) == text) {
+      i += text.size();
+      return op;
+    }
+  const char c = at(i);
+  if (c == '\0' || c == '(' || c == ';') fail(open, "expression '[' is not closed; add ']'");
+  if (is_letter(c)) {
+    std::size_t e = i;
+    while (is_letter(at(e))) ++e;
+    fail(i,
+         fmt::format("'{}' is not an operator; is a ']' missing before it?", t_.substr(i, e - i)));
+  }
+  fail(i, fmt::format("unknown operator '{}' in an expression", c));
 }
 
 }  // namespace volmap::nc::flatten

@@ -37,10 +37,11 @@ struct ParameterTarget {
   std::string name;  ///< named parameter (lower case, no spaces)
 };
 
+enum class Op;
+
 class ValueReader {
  public:
-  ValueReader(std::string_view text, const Parameters& parameters)
-      : t_(text), p_(parameters) {}
+  ValueReader(std::string_view text, const Parameters& parameters) : t_(text), p_(parameters) {}
 
   /// LinuxCNC's read_real_value at `i`; `i` moves past it.
   double real_value(std::size_t& i) const;
@@ -60,6 +61,8 @@ class ValueReader {
   std::string name(std::size_t& i) const;
   double unary(std::size_t& i) const;
   double number(std::size_t& i) const;
+  /// The binary operator (or the closing ']') at i, past it.
+  Op read_operator(std::size_t& i, std::size_t open) const;
   char at(std::size_t i) const { return i < t_.size() ? t_[i] : '\0'; }
 
   std::string_view t_;

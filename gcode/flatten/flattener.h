@@ -48,7 +48,7 @@ inline constexpr int kMaxCallDepth = 9;
 struct Source {
   std::string file;
   std::string data;
-  int first_line = 1;  ///< the number of data's first line in the file
+  int first_line = 1;               ///< the number of data's first line in the file
   std::vector<std::size_t> begins;  ///< each line's start in data; one more: the end
   std::vector<bool> newline;        ///< the line ended with '\n'
   std::size_t size() const { return newline.size(); }
@@ -56,6 +56,11 @@ struct Source {
 };
 /// Splits `data` into lines (a '\r' before '\n' stays with its line).
 std::unique_ptr<Source> make_source(std::string file, std::string data, int first_line);
+
+/// A line without the '\r' of a CRLF ending.
+inline std::string_view without_cr(std::string_view t) {
+  return !t.empty() && t.back() == '\r' ? t.substr(0, t.size() - 1) : t;
+}
 
 struct FlatLine {
   std::string_view text;  ///< valid until the next call
@@ -86,8 +91,8 @@ class Flattener {
     std::size_t source = 0, line = 0;
   };
   struct OWord {
-    std::string label;    ///< "100" or "<name>"
-    std::string keyword;  ///< sub, call, while, ...
+    std::string label;     ///< "100" or "<name>"
+    std::string keyword;   ///< sub, call, while, ...
     std::size_t rest = 0;  ///< in the normalized line, after the keyword
     std::size_t at = 0;    ///< where the O-word begins
   };
@@ -95,7 +100,7 @@ class Flattener {
   struct Frame {
     enum Kind { kCall, kWhile, kDo, kRepeat, kIf, kFanucCall } kind = kCall;
     std::string label;
-    Position start;  ///< call: where to return; loops: their first line; if: the `if` line
+    Position start;   ///< call: where to return; loops: their first line; if: the `if` line
     Position target;  ///< M98: the label's line
     long remaining = 0;
     bool taken = false;
@@ -106,9 +111,17 @@ class Flattener {
   bool read_oword(const Position& p, OWord& o) const;
   /// The next O-word line at or after p in p's source with `label` and one
   /// of `keywords`; fails naming `what` when there is none.
-  Position find(Position p, const std::string& label, std::initializer_list<std::string_view> keywords,
-                const Position& from, const char* what) const;
+  Position find(Position p, const std::string& label,
+                std::initializer_list<std::string_view> keywords, const Position& from,
+                const char* what) const;
   void execute_oword(const Position& p, const OWord& o);
+  void sub_oword(const Position& p, const OWord& o);   ///< sub call endsub return
+  void loop_oword(const Position& p, const OWord& o);  ///< do while endwhile repeat endrepeat
+  void if_oword(const Position& p, const OWord& o);    ///< if elseif else endif
+  void jump_oword(const Position& p, const OWord& o);  ///< break continue
+  bool top_is(Frame::Kind k, const std::string& label) const;
+  /// Refuses anything but a comment at i, after O-word o.
+  void only_comment_after(const Position& p, const OWord& o, std::size_t i) const;
   void call(const Position& p, const OWord& o);
   Position find_sub(const Position& p, const std::string& label);
   /// A line of words: evaluated into line_ (true) or left as written (false).
@@ -127,7 +140,7 @@ class Flattener {
   std::string line_;
   struct Token {
     std::size_t begin = 0, end = 0;  ///< in the normalized line
-    char letter = 0;                  ///< a word's (lower case), or 0
+    char letter = 0;                 ///< a word's (lower case), or 0
     bool evaluated = false;
     double value = 0.0;
   };

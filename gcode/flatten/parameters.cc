@@ -67,8 +67,8 @@ std::optional<double> Parameters::system(int n) const {
 
 double Parameters::get(int n) const {
   if (n < 1 || n >= kParameterCount)
-    throw ValueError{fmt::format("parameter number {} is out of range (1 to {})", n,
-                                 kParameterCount - 1)};
+    throw ValueError{
+        fmt::format("parameter number {} is out of range (1 to {})", n, kParameterCount - 1)};
   if (n >= 5000)
     if (const auto v = system(n)) return *v;
   return numbered_[static_cast<size_t>(n)];
@@ -127,8 +127,8 @@ double Parameters::get(std::string_view name) const {
     const auto& local = frames_.back().named;
     if (const auto it = local.find(name); it != local.end()) return it->second;
   }
-  throw ValueError{fmt::format("named parameter #<{}> is not defined; set it before reading it",
-                               name)};
+  throw ValueError{
+      fmt::format("named parameter #<{}> is not defined; set it before reading it", name)};
 }
 
 bool Parameters::exists(std::string_view name) const {
@@ -138,8 +138,8 @@ bool Parameters::exists(std::string_view name) const {
 
 void Parameters::queue(int number, double value) {
   if (number < 1 || number >= kParameterCount)
-    throw ValueError{fmt::format("parameter number {} is out of range (1 to {})", number,
-                                 kParameterCount - 1)};
+    throw ValueError{
+        fmt::format("parameter number {} is out of range (1 to {})", number, kParameterCount - 1)};
   if ((number >= 5400 && number <= 5413) || (number >= 5420 && number <= 5428))
     throw ValueError{fmt::format("#{} is read-only (LinuxCNC refuses to set it)", number)};
   if (number >= 5161 && number <= 5390)

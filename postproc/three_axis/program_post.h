@@ -29,8 +29,8 @@
 
 #include "core/common/input_error.h"
 #include "gcode/nc_interpreter.h"
-#include "gcode/program_reader.h"
 #include "gcode/nc_writer.h"
+#include "gcode/program_reader.h"
 #include "postproc/three_axis/char_buffer.h"
 #include "postproc/three_axis/corrector.h"
 #include "postproc/three_axis/post_program.h"
@@ -108,7 +108,14 @@ class ProgramPost {
         errors_(errors),
         table_(table),
         options_(options),
-        interp_(setup, file) {}
+        interp_(setup, file) {
+    // Where the controller stands at the start, when given: the first move's
+    // command creeps from there, which sets the direction of its play.
+    if (setup.initial_position_mm) {
+      emitted_mm_ = *setup.initial_position_mm;
+      emitted_known_ = true;
+    }
+  }
 
   /// One line of the program as the reader hands it out (a block, or
   /// verbatim text such as tape leader).

@@ -188,9 +188,8 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
                              const nc::ProgramSetup& setup, const VerifyOptions& options) {
   const std::vector<FeedMove> nom =
       feed_moves(nominal, nominal_name, setup, machine.tool_length_mm, options.subroutine_path);
-  const std::vector<FeedMove> out =
-      feed_moves(compensated, compensated_name, setup, machine.tool_length_mm,
-                 options.subroutine_path);
+  const std::vector<FeedMove> out = feed_moves(compensated, compensated_name, setup,
+                                               machine.tool_length_mm, options.subroutine_path);
   Run run(machine, errors, options.outside);
   VerifyResult r;
   std::vector<FeedMove> nominal_path;

@@ -214,9 +214,15 @@ namespace {
 TEST(NcInterpreter, G80BesideAnotherMotionCodeIsThatCode) {
   nc::Interpreter in(nc::ProgramSetup{}, "g80.ngc");
   nc::BlockEffect fx;
-  const char* lines[] = {"G21 G90 G17",      "G0 X0 Y0 Z5",     "G81 X1 Y1 Z-1 R1 F100",
-                         "G0 X5 G80",        "G80 G1 X7 F100",  "G81 X1 Y1 Z-1 R1",
-                         "G80 G0 Y3",        "X9",              "G0 G80",
+  const char* lines[] = {"G21 G90 G17",
+                         "G0 X0 Y0 Z5",
+                         "G81 X1 Y1 Z-1 R1 F100",
+                         "G0 X5 G80",
+                         "G80 G1 X7 F100",
+                         "G81 X1 Y1 Z-1 R1",
+                         "G80 G0 Y3",
+                         "X9",
+                         "G0 G80",
                          "X11"};
   std::vector<std::pair<nc::MotionKind, double>> got;
   for (int k = 0; k < 10; ++k) {
@@ -225,8 +231,8 @@ TEST(NcInterpreter, G80BesideAnotherMotionCodeIsThatCode) {
   }
   using K = nc::MotionKind;
   const std::vector<std::pair<nc::MotionKind, double>> want = {
-      {K::kRapid, 0}, {K::kCycle, 1}, {K::kRapid, 5}, {K::kLinear, 7}, {K::kCycle, 1},
-      {K::kRapid, 1}, {K::kRapid, 9}, {K::kRapid, 11}};
+      {K::kRapid, 0}, {K::kCycle, 1}, {K::kRapid, 5}, {K::kLinear, 7},
+      {K::kCycle, 1}, {K::kRapid, 1}, {K::kRapid, 9}, {K::kRapid, 11}};
   EXPECT_EQ(got, want);
   EXPECT_THROW(in.execute(nc::lex_block("G0 G1 X1", 11, "g80.ngc"), fx), InputError);
 }

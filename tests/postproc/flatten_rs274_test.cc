@@ -41,10 +41,10 @@ Rs274Run rs274(const fs::path& program) {
   static const fs::path out_dir = test::fresh_dir("flatten_canon");
   static int count = 0;
   const fs::path out = out_dir / (std::to_string(++count) + ".canon");
-  const std::string cmd = "cd " + kDir.string() + " && " +
-                          test::rs274_command("-i subs.ini -g " + program.string() + " " +
-                                              out.string()) +
-                          " >" + out.string() + ".log 2>&1";
+  const std::string cmd =
+      "cd " + kDir.string() + " && " +
+      test::rs274_command("-i subs.ini -g " + program.string() + " " + out.string()) + " >" +
+      out.string() + ".log 2>&1";
   Rs274Run r;
   r.ok = std::system(cmd.c_str()) == 0;
   std::ifstream f(out);

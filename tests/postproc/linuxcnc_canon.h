@@ -7,7 +7,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +20,7 @@
 #include <vector>
 
 #include "gcode/nc_path.h"
+#include "postproc/three_axis/corrector.h"
 #include "tests/support/rs274.h"
 #include "tests/support/test_paths.h"
 
@@ -120,6 +123,70 @@ inline Canon canonical(const std::string& program, const std::string& tool_table
     }
   }
   return c;
+}
+
+// The commanded points of a run (rs274's canonical calls), moved by the
+// machine's error with the play of each axis as the run's moves leave it:
+// the farthest, in um, from the nominal feeds (wo: work offset, mm).
+// `cut_starts`: also the end of each rapid that a feed follows, and the
+// run starts at the program's origin (rs274's start; the post is given the
+// same with --initial-position), so the first move sets the play too.
+inline double worst_deviation_um(const Canon& run, const std::vector<nc::Motion>& nominal,
+                                 const post::Corrector& c, const Eigen::Vector3d& wo,
+                                 bool cut_starts = false) {
+  Eigen::Vector3d h = Eigen::Vector3d::Zero(), prev = wo;
+  bool first = !cut_starts;
+  size_t cursor = 0;
+  double max_um = 0;
+  for (std::size_t k = 0; k < run.points.size(); ++k) {
+    const auto& [p_prog, feed] = run.points[k];
+    const Eigen::Vector3d p = p_prog + wo;
+    for (int a = 0; a < 3 && !first; ++a) {
+      const double step = p[a] - prev[a];
+      if (step == 0 || !c.bidirectional(a)) continue;
+      const double w = c.play_width_mm(a, p);
+      h[a] = w < 1e-9 ? (step > 0 ? 1 : -1) : std::clamp(h[a] + 2 * step / w, -1.0, 1.0);
+    }
+    first = false;
+    prev = p;
+    const bool cut_start =
+        cut_starts && !feed && k + 1 < run.points.size() && run.points[k + 1].second;
+    if (!feed && !cut_start) continue;
+    // A feed that moves nothing (rs274 prints one for `G1 F600`) leaves the
+    // tool where it stood: no command of the post's can be there.
+    if (feed && cut_starts &&
+        p_prog == (k > 0 ? run.points[k - 1].first : Eigen::Vector3d::Zero().eval()))
+      continue;
+    const Eigen::Vector3d actual = p + c.error_with_play(p, h);
+    double best = 1e9;
+    size_t best_i = cursor;
+    for (size_t i = cursor > 3 ? cursor - 3 : 0; i < std::min(nominal.size(), cursor + 6); ++i) {
+      const double d = nc::distance_to_path(nominal[i], actual);
+      if (d < best) {
+        best = d;
+        best_i = i;
+      }
+    }
+    // A path that comes back over itself can take the cursor past the
+    // segment a point belongs to: then the whole path is searched.
+    if (best > 2e-3)
+      for (size_t i = 0; i < nominal.size(); ++i) {
+        const double d = nc::distance_to_path(nominal[i], actual);
+        if (d < best) {
+          best = d;
+          best_i = i;
+        }
+      }
+    cursor = best_i;
+    if (std::getenv("VOLMAP_DEBUG_DEVIATION") && best > 1.25e-3)
+      std::printf(
+          "point %zu (%s) at %.4f %.4f %.4f: %.3f um (h %.2f %.2f %.2f, actual-p %.4f %.4f %.4f "
+          "um)\n",
+          k, feed ? "feed" : "cut start", p_prog.x(), p_prog.y(), p_prog.z(), best * 1e3, h.x(),
+          h.y(), h.z(), (actual - p).x() * 1e3, (actual - p).y() * 1e3, (actual - p).z() * 1e3);
+    max_um = std::max(max_um, best * 1e3);
+  }
+  return max_um;
 }
 
 // `volmap post` on the sample three-axis machine with its errors, args after

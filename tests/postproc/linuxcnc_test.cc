@@ -35,42 +35,6 @@
 namespace volmap {
 namespace {
 
-// The commanded points of a run (rs274's canonical calls), moved by the
-// machine's error with the play of each axis as the run's moves leave it:
-// the farthest, in um, from the nominal feeds (wo: work offset, mm).
-double worst_deviation_um(const Canon& run, const std::vector<nc::Motion>& nominal,
-                          const post::Corrector& c, const Eigen::Vector3d& wo) {
-  Eigen::Vector3d h = Eigen::Vector3d::Zero(), prev = Eigen::Vector3d::Zero();
-  bool first = true;
-  size_t cursor = 0;
-  double max_um = 0;
-  for (const auto& [p_prog, feed] : run.points) {
-    const Eigen::Vector3d p = p_prog + wo;
-    for (int a = 0; a < 3 && !first; ++a) {
-      const double step = p[a] - prev[a];
-      if (step == 0 || !c.bidirectional(a)) continue;
-      const double w = c.play_width_mm(a, p);
-      h[a] = w < 1e-9 ? (step > 0 ? 1 : -1) : std::clamp(h[a] + 2 * step / w, -1.0, 1.0);
-    }
-    first = false;
-    prev = p;
-    if (!feed) continue;
-    const Eigen::Vector3d actual = p + c.error_with_play(p, h);
-    double best = 1e9;
-    size_t best_i = cursor;
-    for (size_t i = cursor > 3 ? cursor - 3 : 0; i < std::min(nominal.size(), cursor + 6); ++i) {
-      const double d = nc::distance_to_path(nominal[i], actual);
-      if (d < best) {
-        best = d;
-        best_i = i;
-      }
-    }
-    cursor = best_i;
-    max_um = std::max(max_um, best * 1e3);
-  }
-  return max_um;
-}
-
 // Arcs kept as arcs: rs274 reads as many arcs as volmap wrote into out.
 void expect_rs274_reads_the_written_arcs(const std::string& out, const Canon& after) {
   int written = 0, read = 0;
