@@ -94,6 +94,10 @@ void BlockCheck::general_steps() {
   if (g[kUnits]) s_.unit_mm = g[kUnits]->code10 == kG20Inch ? 25.4 : 1.0;
   if (g[kToolLength]) tool_length();
   distance_and_coordinate_modes();
+  if (const Word* h = g[kNonModal];
+      h && (h->code10 == kG28Home || h->code10 == kG30SecondHome || h->code10 == kG28_1StoreHome ||
+            h->code10 == kG30_1StoreSecondHome))
+    home(h->code10);
 
   // LinuxCNC asks for Z, R, P and Q only when the block starts a cycle other
   // than the modal one (a G81 restated in G81 keeps the modal values).

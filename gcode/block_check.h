@@ -45,6 +45,9 @@ class BlockCheck {
   void feed_tool_and_spindle();
   void tool_length();
   void distance_and_coordinate_modes();
+  /// G28 G30 (a rapid through the axis words' point to the stored
+  /// position) and G28.1 G30.1 (store where the axes are): home.cc.
+  void home(int code10);
   /// Whether the block moves, and the refusals of words that need a motion.
   bool motion_in_block(bool any_axis);
   /// LinuxCNC's check_other_codes: a word no code of the block uses.

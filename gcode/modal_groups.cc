@@ -66,6 +66,10 @@ int supported_g_group(int code10) {
       return kSpindleMode;
     case kG4Dwell:
     case kG53MachineCoordinates:
+    case kG28Home:
+    case kG28_1StoreHome:
+    case kG30SecondHome:
+    case kG30_1StoreSecondHome:
       return kNonModal;
     default:
       return -1;
@@ -81,12 +85,6 @@ const char* g_refusal(int code10) {
     case kG42_1DynamicCutterCompRight:
       return "cutter radius compensation (G41/G42) is not supported: the post-processor "
              "needs the tool centre path; output it from CAM with G40";
-    case kG28Home:
-    case kG28_1StoreHome:
-    case kG30SecondHome:
-    case kG30_1StoreSecondHome:
-      return "G28/G30 move to stored positions the program does not state; replace them "
-             "with explicit G53 moves";
     case kG92AxisOffset:
     case kG92_1AxisOffsetReset:
     case kG92_2AxisOffsetSuspend:

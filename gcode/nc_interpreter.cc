@@ -1,5 +1,7 @@
 #include "gcode/nc_interpreter.h"
 
+#include <numbers>
+
 #include "gcode/block_check.h"
 #include "gcode/block_words.h"
 
@@ -13,6 +15,16 @@ Interpreter::Interpreter(ProgramSetup setup, std::string file)
     s_.axis_known = {true, true, true};
   }
   s_.rotary_rad = setup_.initial_rotary_rad;
+  // G28's and G30's positions, where the parameter file gives them
+  // (#5161.. and #5181..: X Y Z in mm, A B C in degrees).
+  for (int k = 0; k < 2; ++k)
+    for (int a = 0; a < 6; ++a)
+      if (const auto it = setup_.parameters.find((k == 0 ? 5161 : 5181) + a);
+          it != setup_.parameters.end()) {
+        s_.home[static_cast<size_t>(k)][static_cast<size_t>(a)] =
+            a < 3 ? it->second : it->second * std::numbers::pi / 180.0;
+        s_.home_known[static_cast<size_t>(k)][static_cast<size_t>(a)] = true;
+      }
   s_.tool_axis = setup_.initial_tool_axis;
 }
 
@@ -35,6 +47,7 @@ State Interpreter::check(const Block& b, BlockEffect& effect) const {
   effect.stop_code = false;
   effect.motion_code = -1;
   effect.more_holes.clear();
+  effect.homed_axes = 0;
   State after = s_;
   if (b.percent || b.words.empty()) return after;
   if (s_.ended) return after;  // after M2/M30 nothing executes (LinuxCNC ignores the rest)

@@ -10,12 +10,12 @@
 //
 // Supported: G0 G1 G2 G3 (centre I J K and R forms, full circles, helices,
 // P turns), G17 G18 G19, G20 G21, G90 G91, G90.1 G91.1, G53, G54-G59.3,
-// G43 H / G43.1 / G49, G80-G89 (G73 G81 G82 G83 G85 G86 G89 in G17, G90 or
-// G91, with G98/G99 and L repeats), LinuxCNC's polar coordinates (@ ^),
-// G93 G94 G95, G4, G40, G61 G61.1 G64, G96 G97, F S T, M0-M9,
-// M30, M48 M49 M60 and other M codes (passed through), N numbers, block
-// delete (executed), comments. Everything else is refused with a reason:
-// volmap never passes through a construct it did not understand.
+// G43 H / G43.1 / G49, G28 G30 (through the intermediate point to the
+// positions of a parameter file) and G28.1 G30.1, G80-G89 (G73 G81 G82 G83 G85 G86 G89 in G17, G90
+// or G91, with G98/G99 and L repeats), LinuxCNC's polar coordinates (@ ^), G93 G94 G95, G4, G40,
+// G61 G61.1 G64, G96 G97, F S T, M0-M9, M30, M48 M49 M60 and other M codes (passed through), N
+// numbers, block delete (executed), comments. Everything else is refused with a reason: volmap
+// never passes through a construct it did not understand.
 //
 // Machine coordinates here are those of the controlled point (the tool tip
 // with tool length compensation, LinuxCNC's convention): program position
@@ -98,6 +98,11 @@ struct State {
   /// The tool axis of a tool-vector program (ProgramSetup::tool_axis_words),
   /// unit, in program coordinates.
   Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();
+  /// The positions G28 and G30 return to (LinuxCNC's #5161-#5166 and
+  /// #5181-#5186): axes X Y Z (machine mm) and A B C (rad), each known
+  /// where a parameter file gave it or G28.1/G30.1 stored it.
+  std::array<std::array<double, 6>, 2> home{};
+  std::array<std::array<bool, 6>, 2> home_known{};
 
   friend bool operator==(const State&, const State&) = default;
 };
@@ -110,6 +115,10 @@ struct BlockEffect {
   bool g53 = false;
   bool stop_code = false;  ///< M0 M1 M2 M30 M60 in the block
   int motion_code = -1;    ///< motion G code written in this block, x10, or -1
+  /// G28/G30: bit a for each axis X Y Z that went to its stored position
+  /// (the controller stands exactly there after the block, whatever the
+  /// correction; the block is written as it is).
+  unsigned homed_axes = 0;
   /// A canned cycle repeated (L > 1): the holes after the first, in order
   /// (`motion` is the first). Each starts where the one before it left the
   /// tool: over its hole at the clearance level.

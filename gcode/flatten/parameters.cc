@@ -39,6 +39,13 @@ std::optional<double> Parameters::system(int n) const {
         "#{} is {}, known only on the machine at run time; the post cannot follow a program "
         "whose moves depend on it",
         n, *what)};
+  if ((n >= 5161 && n <= 5166) || (n >= 5181 && n <= 5186)) {
+    const int k = n >= 5181 ? 1 : 0, a = n - (k == 0 ? 5161 : 5181);
+    if (s.home_known[static_cast<size_t>(k)][static_cast<size_t>(a)])
+      return a < 3 ? s.home[static_cast<size_t>(k)][static_cast<size_t>(a)]
+                   : s.home[static_cast<size_t>(k)][static_cast<size_t>(a)] * kDegPerRad;
+    return std::nullopt;
+  }
   if (n == 5220) return s.coord_system + 1;
   if (n >= 5221 && n <= 5390) {
     // G54 from 5221, each system 20 further: X Y Z A B C U V W, R at +9.

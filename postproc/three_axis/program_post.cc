@@ -72,7 +72,12 @@ BlockStyle block_style(const nc::Block& b) {
 void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
                                   const nc::BlockEffect& fx) {
   emit(text);
-  if (fx.has_motion) {
+  if (fx.homed_axes != 0) {
+    // The controller stands at the stored position on those axes exactly;
+    // the block's axis words were the point on the way.
+    for (int a = 0; a < 3; ++a)
+      if (fx.homed_axes & (1u << a)) emitted_mm_[a] = interp_.state().position_mm[a];
+  } else if (fx.has_motion) {
     if (!emitted_known_ || fx.motion.kind == nc::MotionKind::kCycle) {
       emitted_mm_ = interp_.state().position_mm;
     } else {
@@ -88,6 +93,16 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
   }
   emitted_known_ = interp_.state().position_known;
 }
+
+namespace {
+bool has_store_home(const nc::Block& b) {
+  for (const nc::Word& w : b.words)
+    if (w.letter == 'G' &&
+        (w.code10 == nc::kG28_1StoreHome || w.code10 == nc::kG30_1StoreSecondHome))
+      return true;
+  return false;
+}
+}  // namespace
 
 void ProgramPost::line(std::string_view raw, int number, bool newline) {
   current_line_ = number;
@@ -114,7 +129,15 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
     emitted_mm_.z() -= offset - offset_before;
   if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();
-  if (!fx.has_motion || c.zero() || b.block_delete) {
+  if (!c.zero())
+    if (b.has('G') && has_store_home(b))
+      throw InputError(*line_file_, number,
+                       "G28.1/G30.1 store where the controller stands, which the correction "
+                       "moves off the nominal point: give the stored position in the parameter "
+                       "file (`var_file`) instead");
+  // G28/G30 go to the stored position whatever is corrected: written as
+  // they are (rapids, through their intermediate point).
+  if (!fx.has_motion || c.zero() || b.block_delete || fx.homed_axes != 0) {
     // Block delete: the line may or may not run on the machine; it is
     // written unchanged and the correction goes on from its nominal end.
     write_unchanged(text, b, fx);

@@ -239,3 +239,47 @@ TEST(NcInterpreter, G80BesideAnotherMotionCodeIsThatCode) {
 
 }  // namespace
 }  // namespace volmap
+
+namespace volmap {
+namespace {
+
+// G28 as rs274 runs it (LinuxCNC 2.9, homes 0, a tool 1 inch long): its
+// canonical traverses for this program end at (1,2,3), (1,2,3), (1,2,-1)
+// after G28 Z2 (through Z2 to Z home, the tip a tool length below it),
+// (5,2,-1), (0,2,-1) after G91 G28 X0 (X only), and (0,0,-1) after G28
+// (every axis), in inches.
+TEST(NcInterpreter, G28ReturnsAsRs274Does) {
+  nc::ProgramSetup setup;
+  setup.tool_length_mm[1] = 25.4;
+  for (int a = 0; a < 6; ++a) setup.parameters[5161 + a] = 0.0;
+  nc::Interpreter in(setup, "g28.ngc");
+  nc::BlockEffect fx;
+  const char* lines[] = {"G20 G90 G17", "G0 X1 Y2 Z3", "T1 M6",      "G43 H1", "G0 X1 Y2 Z3",
+                         "G28 Z2",      "G0 X5",       "G91 G28 X0", "G90",    "G28"};
+  std::vector<Eigen::Vector3d> ends;
+  for (int k = 0; k < 10; ++k) {
+    in.execute(nc::lex_block(lines[k], k + 1, "g28.ngc"), fx);
+    if (fx.has_motion) ends.push_back(fx.motion.end_mm / 25.4);
+  }
+  const std::vector<Eigen::Vector3d> want = {{1, 2, 3},  {1, 2, 3},  {1, 2, -1},
+                                             {5, 2, -1}, {0, 2, -1}, {0, 0, -1}};
+  ASSERT_EQ(ends.size(), want.size());
+  for (size_t k = 0; k < want.size(); ++k) EXPECT_TRUE(ends[k].isApprox(want[k], 1e-12)) << k;
+  // Without the stored position (no parameter file), G28 is refused.
+  nc::Interpreter bare(nc::ProgramSetup{}, "g28.ngc");
+  try {
+    bare.execute(nc::lex_block("G28", 1, "g28.ngc"), fx);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("#5161"), std::string::npos) << e.what();
+  }
+  // G28.1 stores where the axes stand (the tip plus the tool length).
+  in.execute(nc::lex_block("G0 X1 Y1 Z1", 11, "g28.ngc"), fx);
+  in.execute(nc::lex_block("G28.1", 12, "g28.ngc"), fx);
+  in.execute(nc::lex_block("G0 X3 Y3 Z3", 13, "g28.ngc"), fx);
+  in.execute(nc::lex_block("G28", 14, "g28.ngc"), fx);
+  EXPECT_TRUE((fx.motion.end_mm / 25.4).isApprox(Eigen::Vector3d(1, 1, 1), 1e-12));
+}
+
+}  // namespace
+}  // namespace volmap

@@ -62,7 +62,7 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
   const std::pair<const char*, const char*> cases[] = {
       {"G41 D1", "cutter radius compensation"},
       {"G0 G1 X1", "same modal group"},
-      {"G28", "stored positions"},
+      {"G28", "#5161"},
       {"G92 X0", "G92"},
       {"G38.2 Z-5", "probing"},
       {"M98 P100", "no O100 line"},

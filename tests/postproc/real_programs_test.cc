@@ -36,12 +36,10 @@ const fs::path kDir = test::source_path("tests/data/real/nc");
 // rs274 reads these; volmap refuses them, at the line, for what it does not
 // follow yet (the message names it).
 const std::map<std::string, std::string> kNotYet = {
-    {"haas-style-o0-profile.nc", "G28"},                 // stored home positions
     {"linuxcnc-nisley-door-latch-cam.ngc", "G42"},       // cutter radius compensation
     {"pcb2gcode-linuxcnc-autolevel-back.ngc", "G38.2"},  // probing: run-time values
     {"linuxcnc-daisy.ngc", "axis word A"},               // a rotary axis on a 3-axis machine
-    {"fusion360-generic-face.nc", "G28"},
-    {"linuxcnc-mmount.ngc", "G41"},  // cutter radius compensation
+    {"linuxcnc-mmount.ngc", "G41"},                      // cutter radius compensation
 };
 
 // rs274 refuses these; volmap reads them on purpose.
@@ -123,12 +121,21 @@ TEST(RealPrograms, PostedAsRs274RunsThemOrRefusedAtTheLine) {
             .cwiseMax(Eigen::Vector3d::Zero())
             .cwiseMin(Eigen::Vector3d(500, 400, 300));
     const std::string out = (dir / ("post-" + p.file)).string();
+    // G28's and G30's stored positions where rs274 has them: the program's
+    // origin (its G54 is zero, its homes are zero).
+    const std::string var = out + ".var";
+    {
+      std::ofstream v(var);
+      for (int a = 0; a < 6; ++a)
+        for (int first : {5161, 5181})
+          v << fmt::format("{} {:.6f}\n", first + a, a < 3 ? wo[a] : 0.0);
+    }
     const std::string cmd =
         test::volmap_binary() + " post --machine " + machine + " --errors " + errors +
         fmt::format(" --work-offset {:.4f},{:.4f},{:.4f}", wo.x(), wo.y(), wo.z()) +
-        " --clamp --initial-position 0,0,0 --tool-table " + (dir / "mm.tbl").string() +
-        " --subroutine-path " + (kDir / "subs").string() + " " + in + " -o " + out + " 2>" + out +
-        ".err";
+        " --clamp --initial-position 0,0,0 --var-file " + var + " --tool-table " +
+        (dir / "mm.tbl").string() + " --subroutine-path " + (kDir / "subs").string() + " " + in +
+        " -o " + out + " 2>" + out + ".err";
     const bool ok = std::system(cmd.c_str()) == 0;
     const std::string err = test::file_bytes(out + ".err");
     if (!ok) {
