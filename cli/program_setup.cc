@@ -61,11 +61,6 @@ nc::ProgramSetup ProgramSetupOptions::load(const Machine& m) const {
 }
 
 void print_read_notes(const std::string& in_name, const nc::ReadReport& r) {
-  if (r.byte_order_mark)
-    std::cerr << fmt::format(
-        "note: {}: the UTF-8 byte-order mark at the start is not written out (LinuxCNC refuses "
-        "it)\n",
-        in_name);
   if (r.leader_lines > 0)
     std::cerr << fmt::format(
         "note: {}: line{} 1{} before the first '%' (tape leader) written as they are, not run\n",

@@ -124,8 +124,8 @@ void ProgramReader::find_leader() {
   while (!eof_ && end_ < buf_.size()) fill();
   std::string_view head(buf_.data() + begin_, end_ - begin_);
   if (head.starts_with(kByteOrderMark)) {
-    // Not part of the program: LinuxCNC refuses it ("Bad character
-    // '\357' used"), so it is not written out either (the CLI says so).
+    // An encoding's mark, not G-code: not read, handed out verbatim (the
+    // output begins as the input did).
     report_.byte_order_mark = true;
     begin_ += kByteOrderMark.size();
     head.remove_prefix(kByteOrderMark.size());
@@ -197,6 +197,10 @@ bool ProgramReader::next(ProgramLine& out) {
   if (!started_) {
     started_ = true;
     find_leader();
+    if (report_.byte_order_mark) {
+      out = ProgramLine{kByteOrderMark, &file_, 1, false, true, false};
+      return true;
+    }
   }
   if (flat_) {
     flatten::FlatLine f;

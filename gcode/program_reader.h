@@ -1,8 +1,8 @@
 // An NC program's lines as the controller runs them, for the interpreter
 // and the post-processors: read in large pieces (a program of any size
 // streams through in constant memory), the tape's frame set aside (a UTF-8
-// byte-order mark, dropped; leader text before the first '%' and what
-// follows the closing '%', handed out verbatim), and, from the first line that uses parameters,
+// byte-order mark, leader text before the first '%' and what follows the
+// closing '%': handed out verbatim, not read), and, from the first line that uses parameters,
 // expressions or O-word control flow on, the program flattened (flatten/flattener.h).
 //
 // Every line of the file comes out once, in order, until flattening

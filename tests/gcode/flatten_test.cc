@@ -273,7 +273,7 @@ TEST(Flatten, SystemParametersAreTheInterpretersState) {
 TEST(ProgramReader, TapeFrameAndByteOrderMark) {
   const std::string p = "\xEF\xBB\xBFNX listing\nheader line\n%\nG0 X1 Y2 Z3\n%\ntrailing text\n";
   const Read r = read(p);
-  EXPECT_EQ(r.out, p.substr(3));  // every byte but the mark (LinuxCNC refuses it)
+  EXPECT_EQ(r.out, p);  // every byte, the mark included
   EXPECT_TRUE(r.report.byte_order_mark);
   EXPECT_EQ(r.report.leader_lines, 2);
   EXPECT_EQ(r.report.trailer_lines, 1);

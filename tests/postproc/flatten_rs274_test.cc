@@ -119,7 +119,7 @@ TEST(FlattenRs274, FlatOutputRunsAsTheProgramDoes) {
 
 // Refused by rs274, read by volmap on purpose:
 //  - err-bom: the byte-order mark is an encoding's, not the program's
-//    (volmap drops it, and says so);
+//    (volmap reads past it and writes it back);
 //  - err-k-word-xy-arc: K0 on a G17 arc moves nothing (FreeCAD writes it);
 //  - err-duplicate-label: two `o1 if` blocks one after the other; the
 //    labels do not overlap, so what runs is not in doubt;
