@@ -98,6 +98,11 @@ void BlockCheck::general_steps() {
       h && (h->code10 == kG28Home || h->code10 == kG30SecondHome || h->code10 == kG28_1StoreHome ||
             h->code10 == kG30_1StoreSecondHome))
     home(h->code10);
+  if (const Word* o = g[kNonModal];
+      o && (o->code10 == kG10SetOffsets || o->code10 == kG92AxisOffset ||
+            o->code10 == kG92_1AxisOffsetReset || o->code10 == kG92_2AxisOffsetSuspend ||
+            o->code10 == kG92_3AxisOffsetRestore))
+    offsets(o->code10);
 
   // LinuxCNC asks for Z, R, P and Q only when the block starts a cycle other
   // than the modal one (a G81 restated in G81 keeps the modal values).
@@ -188,6 +193,8 @@ void BlockCheck::distance_and_coordinate_modes() {
   if (g[kCoordSystem]) {
     for (int k = 0; k < 9; ++k)
       if (kWorkOffsetCodes[k] == g[kCoordSystem]->code10) s_.coord_system = k;
+    s_.origin_mm = s_.coord_offset_mm[static_cast<size_t>(s_.coord_system)] +
+                   (s_.g92_applied ? s_.g92_mm : Eigen::Vector3d::Zero());
   }
   if (g[kDistance]) s_.absolute = g[kDistance]->code10 == kG90Absolute;
   if (g[kArcDistance]) s_.arc_absolute = g[kArcDistance]->code10 == kG90_1ArcCentreAbsolute;
@@ -257,6 +264,7 @@ void BlockCheck::unused_words(bool motion_here) {
     }
   const bool g4 = g[kNonModal] && g[kNonModal]->code10 == kG4Dwell;
   const bool g64 = g[kPathControl] && g[kPathControl]->code10 == kG64Blending;
+  const bool g10 = g[kNonModal] && g[kNonModal]->code10 == kG10SetOffsets;  // L P R
   const auto unused = [&](char L, bool used, const char* users) {
     if (const Word* w = word(L); w && !used)
       fail(w, fmt::format("{} word with no {} to use it; LinuxCNC refuses the block: remove it", L,
@@ -267,12 +275,12 @@ void BlockCheck::unused_words(bool motion_here) {
   for (char L : {'I', 'J', 'K'})
     unused(L, arc || (setup_.tool_axis_words && straight),
            setup_.tool_axis_words ? "G0, G1 (tool axis), G2 or G3" : "G2 or G3");
-  unused('R', arc || cycle, "G2, G3 or canned cycle");
-  unused('L', cycle, "canned cycle");
+  unused('R', arc || cycle || g10, "G2, G3, G10 or canned cycle");
+  unused('L', cycle || g10, "G10 or canned cycle");
   unused('P',
-         g4 || g64 || arc || motion_to_be == kG82DrillDwell ||
+         g4 || g64 || g10 || arc || motion_to_be == kG82DrillDwell ||
              motion_to_be == kG86BoreSpindleStop || motion_to_be == kG89BoreDwell,
-         "G2, G3, G4, G64, G82, G86 or G89");
+         "G2, G3, G4, G10, G64, G82, G86 or G89");
   unused('Q', g64 || motion_to_be == kG73PeckDrillChipBreak || motion_to_be == kG83PeckDrill,
          "G64, G73 or G83");
 }

@@ -32,9 +32,7 @@ class BlockCheck {
   }
   const Word* word(char L) const { return words_.letter[static_cast<size_t>(L - 'A')]; }
   /// Work offset of the coordinate system active in s_, mm.
-  const Eigen::Vector3d& work_offset() const {
-    return setup_.work_offset_mm[static_cast<size_t>(s_.coord_system)];
-  }
+  const Eigen::Vector3d& work_offset() const { return s_.origin_mm; }
 
   // block_check.cc
   void check_polar_words() const;
@@ -48,6 +46,8 @@ class BlockCheck {
   /// G28 G30 (a rapid through the axis words' point to the stored
   /// position) and G28.1 G30.1 (store where the axes are): home.cc.
   void home(int code10);
+  /// G10 L2/L20 and G92 G92.1 G92.2 G92.3: offsets.cc.
+  void offsets(int code10);
   /// Whether the block moves, and the refusals of words that need a motion.
   bool motion_in_block(bool any_axis);
   /// LinuxCNC's check_other_codes: a word no code of the block uses.

@@ -70,6 +70,11 @@ int supported_g_group(int code10) {
     case kG28_1StoreHome:
     case kG30SecondHome:
     case kG30_1StoreSecondHome:
+    case kG10SetOffsets:
+    case kG92AxisOffset:
+    case kG92_1AxisOffsetReset:
+    case kG92_2AxisOffsetSuspend:
+    case kG92_3AxisOffsetRestore:
       return kNonModal;
     default:
       return -1;
@@ -85,16 +90,8 @@ const char* g_refusal(int code10) {
     case kG42_1DynamicCutterCompRight:
       return "cutter radius compensation (G41/G42) is not supported: the post-processor "
              "needs the tool centre path; output it from CAM with G40";
-    case kG92AxisOffset:
-    case kG92_1AxisOffsetReset:
-    case kG92_2AxisOffsetSuspend:
-    case kG92_3AxisOffsetRestore:
     case kG52LocalOffset:
-      return "G92/G52 coordinate offsets are not supported; use G54-G59.3 work offsets "
-             "(`work_offset` or `var_file`)";
-    case kG10SetOffsets:
-      return "G10 (setting offsets or tools from the program) is not supported; give them "
-             "with `var_file` / `tool_table`";
+      return "G52 local offsets are not supported; use G92 or G10 L2";
     case kG38_2Probe:
     case kG38_3Probe:
     case kG38_4Probe:

@@ -10,12 +10,12 @@
 //
 // Supported: G0 G1 G2 G3 (centre I J K and R forms, full circles, helices,
 // P turns), G17 G18 G19, G20 G21, G90 G91, G90.1 G91.1, G53, G54-G59.3,
-// G43 H / G43.1 / G49, G28 G30 (through the intermediate point to the
-// positions of a parameter file) and G28.1 G30.1, G80-G89 (G73 G81 G82 G83 G85 G86 G89 in G17, G90
-// or G91, with G98/G99 and L repeats), LinuxCNC's polar coordinates (@ ^), G93 G94 G95, G4, G40,
-// G61 G61.1 G64, G96 G97, F S T, M0-M9, M30, M48 M49 M60 and other M codes (passed through), N
-// numbers, block delete (executed), comments. Everything else is refused with a reason: volmap
-// never passes through a construct it did not understand.
+// G43 H / G43.1 / G49, G10 L2/L20, G92 G92.1 G92.2 G92.3, G28 G30 (through the intermediate point
+// to the positions of a parameter file) and G28.1 G30.1, G80-G89 (G73 G81 G82 G83 G85 G86 G89 in
+// G17, G90 or G91, with G98/G99 and L repeats), LinuxCNC's polar coordinates (@ ^), G93 G94 G95,
+// G4, G40, G61 G61.1 G64, G96 G97, F S T, M0-M9, M30, M48 M49 M60 and other M codes (passed
+// through), N numbers, block delete (executed), comments. Everything else is refused with a reason:
+// volmap never passes through a construct it did not understand.
 //
 // Machine coordinates here are those of the controlled point (the tool tip
 // with tool length compensation, LinuxCNC's convention): program position
@@ -61,6 +61,19 @@ struct State {
   int plane = 0;              ///< 0 XY, 1 ZX, 2 YZ
   int motion = kG0Rapid;      ///< G code x 10 of the modal motion (G0 G1 G2 G3 G73 G80-G89)
   int coord_system = 0;       ///< 0 = G54 .. 8 = G59.3
+  /// The program's origin, machine mm: the active coordinate system's
+  /// offset, plus the G92 offset while it applies.
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
+  /// G54 .. G59.3 (ProgramSetup's, changed by G10 L2/L20), machine mm.
+  std::array<Eigen::Vector3d, 9> coord_offset_mm = [] {
+    std::array<Eigen::Vector3d, 9> zero;
+    zero.fill(Eigen::Vector3d::Zero());
+    return zero;
+  }();
+  /// The G92 offset (LinuxCNC's #5211-#5213) and whether it applies
+  /// (#5210: G92 and G92.3 apply it, G92.1 and G92.2 suspend it).
+  Eigen::Vector3d g92_mm = Eigen::Vector3d::Zero();
+  bool g92_applied = false;
   bool tool_length_active = false;
   /// The active tool length offset (G43 H, G43.1), mm; 0 under G49 (and
   /// before any G43), so it is the offset in effect either way. As in
@@ -115,6 +128,9 @@ struct BlockEffect {
   bool g53 = false;
   bool stop_code = false;  ///< M0 M1 M2 M30 M60 in the block
   int motion_code = -1;    ///< motion G code written in this block, x10, or -1
+  /// G92 or G10 L20 with axis words: offsets set from where the tool
+  /// stands, which on the machine is where the post's command put it.
+  bool offsets_from_position = false;
   /// G28/G30: bit a for each axis X Y Z that went to its stored position
   /// (the controller stands exactly there after the block, whatever the
   /// correction; the block is written as it is).
@@ -149,9 +165,7 @@ class Interpreter {
   const State& state() const { return s_; }
   const ProgramSetup& setup() const { return setup_; }
   /// Work offset of the active coordinate system, mm.
-  const Eigen::Vector3d& work_offset() const {
-    return setup_.work_offset_mm[static_cast<size_t>(s_.coord_system)];
-  }
+  const Eigen::Vector3d& work_offset() const { return s_.origin_mm; }
 
  private:
   ProgramSetup setup_;

@@ -33,7 +33,6 @@ void Parameters::load(int number, double value) {
 
 std::optional<double> Parameters::system(int n) const {
   const State& s = interp_.state();
-  const ProgramSetup& setup = interp_.setup();
   if (const auto what = run_time_parameter(n); what && !written_.contains(n))
     throw ValueError{fmt::format(
         "#{} is {}, known only on the machine at run time; the post cannot follow a program "
@@ -47,10 +46,12 @@ std::optional<double> Parameters::system(int n) const {
     return std::nullopt;
   }
   if (n == 5220) return s.coord_system + 1;
+  if (n == 5210) return s.g92_applied ? 1.0 : 0.0;
+  if (n >= 5211 && n <= 5213) return s.g92_mm[n - 5211];
   if (n >= 5221 && n <= 5390) {
     // G54 from 5221, each system 20 further: X Y Z A B C U V W, R at +9.
     const int k = (n - 5221) / 20, a = (n - 5221) % 20;
-    if (k < 9 && a < 3) return setup.work_offset_mm[static_cast<size_t>(k)][a];
+    if (k < 9 && a < 3) return s.coord_offset_mm[static_cast<size_t>(k)][a];
     return std::nullopt;  // the stored value (a .var file's, or 0)
   }
   if (n == 5400) return s.tool;
@@ -63,8 +64,7 @@ std::optional<double> Parameters::system(int n) const {
             "#{} (the current {} position) is not known here: the program has not commanded {} "
             "yet; command it first, or give `initial_position`",
             n, "XYZ"[a], "XYZ"[a])};
-      const double offset = setup.work_offset_mm[static_cast<size_t>(s.coord_system)][a];
-      return (s.position_mm[a] - offset) / s.unit_mm;
+      return (s.position_mm[a] - s.origin_mm[a]) / s.unit_mm;
     }
     if (a < 6) return s.rotary_rad[static_cast<size_t>(a - 3)] * kDegPerRad;
     return 0.0;

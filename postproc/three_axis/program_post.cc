@@ -120,6 +120,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   block_.evaluated = evaluated_;
   const nc::Block& b = block_;
   const bool known_before = interp_.state().position_known;
+  const Vector3d position_before = interp_.state().position_mm;
   const double offset_before = interp_.state().tool_length_mm;
   nc::BlockEffect& fx = fx_;
   interp_.execute(b, fx);
@@ -135,6 +136,10 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
                        "G28.1/G30.1 store where the controller stands, which the correction "
                        "moves off the nominal point: give the stored position in the parameter "
                        "file (`var_file`) instead");
+  if (fx.offsets_from_position && !c.zero()) {
+    offsets_line(text, b, position_before);
+    return;
+  }
   // G28/G30 go to the stored position whatever is corrected: written as
   // they are (rapids, through their intermediate point).
   if (!fx.has_motion || c.zero() || b.block_delete || fx.homed_axes != 0) {
@@ -172,6 +177,32 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
                      "a feed move and a stop code (M0/M1/M2/M30/M60) in one block; "
                      "put the stop code on its own line");
   feed_line(text, b, fx, c, style);
+}
+
+void ProgramPost::offsets_line(std::string_view text, const nc::Block& b,
+                               const Vector3d& nominal_mm) {
+  // G92 / G10 L20 take where the controller stands, which is where the post
+  // commanded it, not the nominal point: each value moves by the
+  // difference, so the controller sets the nominal offset.
+  if (!emitted_known_)
+    throw InputError(*line_file_, current_line_,
+                     "an offset set from where the tool stands (G92, G10 L20) before the post "
+                     "knows where the controller stands; command X, Y and Z first");
+  std::string out(text);
+  const double unit = interp_.state().unit_mm;
+  const int dec = decimals();
+  bool changed = false;
+  for (std::size_t k = b.words.size(); k-- > 0;) {
+    const nc::Word& w = b.words[k];
+    if (w.letter < 'X' || w.letter > 'Z') continue;
+    const int a = w.letter - 'X';
+    const double v = w.value + (emitted_mm_[a] - nominal_mm[a]) / unit;
+    if (std::abs(v - w.value) < half_unit(dec)) continue;
+    out.replace(w.begin + 1, w.end - w.begin - 1, nc::format_number(v, dec));
+    changed = true;
+  }
+  if (changed) ++report_.lines_changed;
+  emit(out);
 }
 
 std::size_t ProgramPost::feed_block_removals(const nc::Block& b, const BlockStyle& style, bool arc,

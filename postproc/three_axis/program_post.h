@@ -187,6 +187,9 @@ class ProgramPost {
   /// The line as written: the controller then stands where its words say,
   /// the axes it does not name where we left them.
   void write_unchanged(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx);
+  /// G92 / G10 L20 with axis words: their values moved by where the
+  /// controller stands off the nominal point.
+  void offsets_line(std::string_view text, const nc::Block& b, const Vector3d& nominal_mm);
   /// A rapid, or a canned-cycle block of one hole in G90 (positioning_move.cc).
   void positioning_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
                         const Corrector& c, const BlockStyle& style);

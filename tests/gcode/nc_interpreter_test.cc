@@ -7,11 +7,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <random>
 #include <string>
 
 #include "core/common/input_error.h"
 #include "gcode/nc_block.h"
+#include "tests/support/test_paths.h"
 
 namespace volmap {
 namespace {
@@ -279,6 +281,38 @@ TEST(NcInterpreter, G28ReturnsAsRs274Does) {
   in.execute(nc::lex_block("G0 X3 Y3 Z3", 13, "g28.ngc"), fx);
   in.execute(nc::lex_block("G28", 14, "g28.ngc"), fx);
   EXPECT_TRUE((fx.motion.end_mm / 25.4).isApprox(Eigen::Vector3d(1, 1, 1), 1e-12));
+}
+
+}  // namespace
+}  // namespace volmap
+
+namespace volmap {
+namespace {
+
+// G10 L2, G10 L20, G92 and G92.1-G92.3 as rs274 runs
+// tests/data/linuxcnc/offsets.ngc: it prints G54 = (5, 1, 0) after G10 L2,
+// G55 X = 6 after G10 L20 at machine X 6, G92 = (3, -1, 0) after G92 X0 Y0
+// at machine (8, 0, 0) in G54, and every G0 X1 Y1 at program (1, 1): so the
+// machine points are (6, 2, 1), (8, 0, 0), (9, 1, 0), (6, 2, 0) after G92.2,
+// (9, 1, 0) after G92.3 and (6, 2, 0) after G92.1.
+TEST(NcInterpreter, OffsetsAsRs274SetsThem) {
+  nc::Interpreter in(nc::ProgramSetup{}, "offsets.ngc");
+  nc::BlockEffect fx;
+  std::ifstream f(test::source_path("tests/data/linuxcnc/offsets.ngc"));
+  std::vector<Eigen::Vector3d> ends;
+  std::string line;
+  for (int n = 1; std::getline(f, line); ++n) {
+    in.execute(nc::lex_block(line, n, "offsets.ngc"), fx);
+    if (fx.has_motion) ends.push_back(fx.motion.end_mm);
+  }
+  const std::vector<Eigen::Vector3d> want = {{0, 0, 0}, {6, 2, 1}, {8, 0, 0}, {9, 1, 0},
+                                             {6, 2, 0}, {9, 1, 0}, {6, 2, 0}};
+  ASSERT_EQ(ends.size(), want.size());
+  for (size_t k = 0; k < want.size(); ++k) EXPECT_TRUE(ends[k].isApprox(want[k], 1e-12)) << k;
+  nc::Interpreter fresh(nc::ProgramSetup{}, "o.ngc");
+  EXPECT_THROW(fresh.execute(nc::lex_block("G10 L1 P1 Z5", 1, "o.ngc"), fx), InputError);
+  EXPECT_THROW(fresh.execute(nc::lex_block("G10 L2 P1 R30", 1, "o.ngc"), fx), InputError);
+  EXPECT_THROW(fresh.execute(nc::lex_block("G92 X0", 1, "o.ngc"), fx), InputError);  // X unknown
 }
 
 }  // namespace

@@ -288,3 +288,59 @@ TEST(LinuxCnc, ExpandedPeckCyclesAreRs274sMoves) {
 
 }  // namespace
 }  // namespace volmap
+
+namespace volmap {
+namespace {
+
+// The offsets rs274 prints (SET_G5X_OFFSET, SET_G92_OFFSET), in order.
+std::vector<std::vector<double>> offsets_of(const std::string& canon_file) {
+  std::ifstream f(canon_file);
+  std::vector<std::vector<double>> out;
+  for (std::string l; std::getline(f, l);) {
+    if (l.find("SET_G5X_OFFSET(") == std::string::npos &&
+        l.find("SET_G92_OFFSET(") == std::string::npos)
+      continue;
+    std::vector<double> v;
+    std::stringstream ss(l.substr(l.find('(') + 1));
+    for (std::string tok; std::getline(ss, tok, ',');)
+      v.push_back(std::strtod(tok.c_str(), nullptr));
+    out.push_back(v);
+  }
+  return out;
+}
+
+// G92 and G10 L20 set offsets from where the controller stands, which the
+// correction moves off the nominal point: the post moves their values by
+// as much, so that rs274, running the output, sets the same offsets as it
+// does running the input (to its printed 4 decimals, plus the output's).
+TEST(LinuxCnc, OffsetsSetFromThePositionAreTheNominalOnes) {
+  require_rs274();
+  const fs::path dir = test::fresh_dir("linuxcnc_offsets");
+  const std::string in = test::source_path("tests/data/linuxcnc/offsets.ngc");
+  const std::string out = (dir / "offsets.ngc").string();
+  const std::string cmd =
+      hsu_post_command("--work-offset 0,0,0 --initial-position 0,0,0 --clamp " + in + " -o " + out);
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string canon_in = (dir / "in.canon").string(),
+                    canon_out = (dir / "out.canon").string();
+  ASSERT_EQ(std::system(test::rs274_command("-g " + in + " " + canon_in + " >/dev/null").c_str()),
+            0);
+  ASSERT_EQ(
+      std::system(test::rs274_command("-g " + out + " " + canon_out + " >/dev/null 2>&1").c_str()),
+      0);
+  const auto before = offsets_of(canon_in), after = offsets_of(canon_out);
+  ASSERT_EQ(before.size(), after.size());
+  ASSERT_GE(before.size(), 8u);
+  for (size_t k = 0; k < before.size(); ++k) {
+    ASSERT_EQ(before[k].size(), after[k].size());
+    for (size_t a = 0; a < before[k].size(); ++a)
+      EXPECT_NEAR(after[k][a], before[k][a], 1.6e-4) << k;
+  }
+  // The G92 and G10 L20 lines themselves did change.
+  const std::string text = test::file_bytes(out);
+  EXPECT_EQ(text.find("G92 X0 Y0\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("G10 L20 P2 X0\n"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace volmap

@@ -63,7 +63,7 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
       {"G41 D1", "cutter radius compensation"},
       {"G0 G1 X1", "same modal group"},
       {"G28", "#5161"},
-      {"G92 X0", "G92"},
+      {"G92 X0", "from where the tool stands"},
       {"G38.2 Z-5", "probing"},
       {"M98 P100", "no O100 line"},
       {"G0 A10", "axis word A"},
@@ -85,10 +85,10 @@ TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
       // to use it", "R word with no g code that uses it", ...).
       {"G0 X1 Y1 Z5 I2", "I word with no G2 or G3"},
       {"G0 X1 Y1 Z5\nF10 G1 X2 K1", "K word with no G2 or G3"},
-      {"G0 X1 Y1 Z5\nG91 Z-4 R-4", "R word with no G2, G3 or canned cycle"},
+      {"G0 X1 Y1 Z5\nG91 Z-4 R-4", "R word with no G2, G3, G10 or canned cycle"},
       {"G0 X1 Y1 Z5\nX2 P0.3", "P word with no"},
       {"G0 X1 Y1 Z5\nX2 Q1", "Q word with no G64, G73 or G83"},
-      {"G0 X1 Y1 Z5\nF10 G1 X2 L3", "L word with no canned cycle"},
+      {"G0 X1 Y1 Z5\nF10 G1 X2 L3", "L word with no G10 or canned cycle"},
       {"G0 X1 Y1 Z5\nG2", "neither axis words nor a centre"},
       // rs274: "K word given for arc in xy plane", "Mixed radius ijk format".
       {"G0 X0 Y0 Z5\nF10 G2 X10 Y0 I5 J0 K1", "K word given for an arc in the XY (G17) plane"},

@@ -1,0 +1,81 @@
+// Offsets set from the program, as LinuxCNC sets them (its manual's "G10
+// L2", "G10 L20", "G92, G92.1, G92.2, G92.3"):
+//  - G10 L2 P<n> X Y Z: coordinate system n (1 = G54 .. 9 = G59.3, 0 = the
+//    active one) gets its origin at those machine coordinates (program
+//    units), the axes not named unchanged; R (a rotation) is refused.
+//  - G10 L20 P<n> X Y Z: the same, so that where the tool stands has those
+//    coordinates in system n.
+//  - G92 X Y Z: an offset on top of every coordinate system, so that where
+//    the tool stands has those coordinates; the axes not named keep theirs.
+//    G92.1 clears it, G92.2 suspends it, G92.3 applies it again.
+// Tool table rows (G10 L1 L10 L11) are refused: give a tool table.
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "gcode/block_check.h"
+#include "gcode/g_codes.h"
+
+namespace volmap::nc {
+
+void BlockCheck::offsets(int code10) {
+  const Word* self = g[kNonModal];
+  const bool any = word('X') || word('Y') || word('Z');
+  if (any && g[kMotion])
+    fail(self, "offsets and a motion code in one block both use the axis words; split the block");
+  if (word('A') || word('B') || word('C'))
+    fail(self, "offsets of rotary axes are not supported; set them in the parameter file");
+  consumed_axes_ = any;
+  auto known_position = [&](int a) {
+    if (!s_.axis_known[static_cast<size_t>(a)])
+      fail(word("XYZ"[a]), fmt::format("an offset set from where the tool stands, and {} is not "
+                                       "known here; command it first, or give `initial_position`",
+                                       "XYZ"[a]));
+  };
+  if (code10 == kG10SetOffsets) {
+    const Word* l = word('L');
+    const Word* p = word('P');
+    if (!l || (l->value != 2 && l->value != 20))
+      fail(l ? l : self,
+           "G10 sets work offsets with L2 or L20 here; tool table rows (L1 L10 "
+           "L11) are not supported: give them with `tool_table`");
+    if (!p || p->value != std::floor(p->value) || p->value < 0 || p->value > 9)
+      fail(p ? p : self, "G10 needs P0 (the active system) to P9 (G59.3)");
+    if (const Word* r = word('R'); r && r->value != 0.0)
+      fail(r, "G10 R (a rotation of the coordinate system) is not supported");
+    const int n = p->value == 0 ? s_.coord_system : static_cast<int>(p->value) - 1;
+    Eigen::Vector3d& offset = s_.coord_offset_mm[static_cast<size_t>(n)];
+    for (int a = 0; a < 3; ++a) {
+      const Word* w = word("XYZ"[a]);
+      if (!w) continue;
+      if (l->value == 2) {
+        offset[a] = w->value * s_.unit_mm;
+      } else {
+        known_position(a);
+        offset[a] =
+            s_.position_mm[a] - (s_.g92_applied ? s_.g92_mm[a] : 0.0) - w->value * s_.unit_mm;
+        effect_.offsets_from_position = true;
+      }
+    }
+  } else if (code10 == kG92AxisOffset) {
+    if (!any) fail(self, "G92 needs an axis word");
+    const Eigen::Vector3d& coord = s_.coord_offset_mm[static_cast<size_t>(s_.coord_system)];
+    if (!s_.g92_applied) s_.g92_mm.setZero();
+    for (int a = 0; a < 3; ++a) {
+      const Word* w = word("XYZ"[a]);
+      if (!w) continue;
+      known_position(a);
+      s_.g92_mm[a] = s_.position_mm[a] - coord[a] - w->value * s_.unit_mm;
+    }
+    s_.g92_applied = true;
+    effect_.offsets_from_position = true;
+  } else {
+    if (any) fail(self, "G92.1, G92.2 and G92.3 take no axis words");
+    if (code10 == kG92_1AxisOffsetReset) s_.g92_mm.setZero();
+    s_.g92_applied = code10 == kG92_3AxisOffsetRestore;
+  }
+  s_.origin_mm = s_.coord_offset_mm[static_cast<size_t>(s_.coord_system)] +
+                 (s_.g92_applied ? s_.g92_mm : Eigen::Vector3d::Zero());
+}
+
+}  // namespace volmap::nc
