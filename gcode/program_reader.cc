@@ -1,6 +1,7 @@
 #include "gcode/program_reader.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 #include "gcode/nc_interpreter.h"
@@ -24,7 +25,24 @@ bool is_percent_line(std::string_view t) {
 
 }  // namespace
 
+namespace {
+// The characters that can make a line more than a block of literal words:
+// '#' '[' (parameters, expressions), 'O' (O-words), 'M' (M98/M99), '%'.
+// Most lines have none: one look per character, then nothing else.
+constexpr std::array<bool, 256> kNotPlain = [] {
+  std::array<bool, 256> t{};
+  for (unsigned char c : {'#', '[', 'O', 'o', 'M', 'm', '%'}) t[c] = true;
+  return t;
+}();
+bool maybe_special(std::string_view t) {
+  for (const char c : t)
+    if (kNotPlain[static_cast<unsigned char>(c)]) return true;
+  return false;
+}
+}  // namespace
+
 bool needs_flattening(std::string_view t) {
+  if (!maybe_special(t)) return false;
   // An O-word begins the block (after '/' and an N number).
   std::size_t i = 0;
   auto skip = [&] {
@@ -198,7 +216,7 @@ bool ProgramReader::next(ProgramLine& out) {
     started_ = true;
     find_leader();
     if (report_.byte_order_mark) {
-      out = ProgramLine{kByteOrderMark, &file_, 1, false, true, false};
+      out = ProgramLine{kByteOrderMark, &file_, 1, false, true, false, false, {}};
       return true;
     }
   }
@@ -208,18 +226,28 @@ bool ProgramReader::next(ProgramLine& out) {
       report_.flat_blocks = flat_->emitted_lines();
       if (!trailer_ || trailer_next_ >= trailer_->size()) return false;
       const std::size_t k = trailer_next_++;
-      out = ProgramLine{trailer_->line(k),    &file_, trailer_->first_line + static_cast<int>(k),
-                        trailer_->newline[k], k > 0,  false};
+      out = ProgramLine{trailer_->line(k),
+                        &file_,
+                        trailer_->first_line + static_cast<int>(k),
+                        trailer_->newline[k],
+                        k > 0,
+                        false,
+                        false,
+                        {}};
       return true;
     }
     report_.flat_blocks = flat_->emitted_lines();
-    out = ProgramLine{f.text, f.file, f.line, f.newline, f.verbatim, f.rewritten};
+    out = ProgramLine{f.text, f.file, f.line, f.newline, f.verbatim, f.rewritten, false, {}};
     return true;
   }
   std::string_view text;
   bool newline = false;
   if (!physical(text, newline)) return false;
-  out = ProgramLine{text, &file_, number_, newline, false, false};
+  out.text = text;
+  out.file = &file_;
+  out.line = number_;
+  out.newline = newline;
+  out.verbatim = out.rewritten = out.plain = false;
   if (leader_left_ > 0) {
     --leader_left_;
     out.verbatim = true;
@@ -230,6 +258,13 @@ bool ProgramReader::next(ProgramLine& out) {
     out.verbatim = true;
     return true;
   }
+  // The usual line: axis words only (read here once, for the post), or no
+  // character that could make it more than literal words.
+  if (lex_plain_axis_words(flatten::without_cr(text), out.words)) {
+    out.plain = true;
+    return true;
+  }
+  if (!maybe_special(text)) return true;
   if (is_percent_line(text)) {
     if (opened_) closed_ = true;
     opened_ = true;

@@ -20,6 +20,7 @@
 
 #include "gcode/flatten/flattener.h"
 #include "gcode/flatten/parameters.h"
+#include "gcode/nc_block.h"
 
 namespace volmap::nc {
 
@@ -32,6 +33,10 @@ struct ProgramLine {
   bool newline = true;     ///< a '\n' followed it
   bool verbatim = false;   ///< not run by the controller: write it as it is, do not interpret
   bool rewritten = false;  ///< evaluated by the flattener
+  /// A line of axis words X Y Z only (nc::lex_plain_axis_words), read
+  /// already: `words` holds them. Most lines of a CAM program are such.
+  bool plain = false;
+  PlainAxisWords words;
 };
 
 struct ReadReport {

@@ -8,7 +8,7 @@
 
 namespace volmap::post {
 
-bool ProgramPost::plain_line(std::string_view text) {
+bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* read) {
   const nc::State& st = interp_.state();
   // The state the line needs (the rest is execute_linear_axes's): the same
   // tool as the last line, errors, the controller's position known, G90,
@@ -18,8 +18,9 @@ bool ProgramPost::plain_line(std::string_view text) {
       machine_.tool_length_mm + st.tool_length_mm != last_corrector_length_ ||
       last_corrector_->zero())
     return false;
-  nc::PlainAxisWords words;
-  if (!nc::lex_plain_axis_words(text, words)) return false;
+  nc::PlainAxisWords parsed;
+  if (!read && !nc::lex_plain_axis_words(text, parsed)) return false;
+  const nc::PlainAxisWords& words = read ? *read : parsed;
   if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_)) return false;
   // From here on, line()'s path for a straight feed move, step by step.
   ctrl_il_known_ = false;  // the run of cycle blocks has ended

@@ -104,7 +104,8 @@ bool has_store_home(const nc::Block& b) {
 }
 }  // namespace
 
-void ProgramPost::line(std::string_view raw, int number, bool newline) {
+void ProgramPost::line(std::string_view raw, int number, bool newline,
+                       const nc::PlainAxisWords* plain) {
   current_line_ = number;
   ++report_.lines;
   // The line ending goes out as it came in (CRLF stays CRLF; a last line
@@ -114,7 +115,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline) {
   line_ending_size_ = 0;
   if (cr) line_ending_[line_ending_size_++] = '\r';
   if (newline) line_ending_[line_ending_size_++] = '\n';
-  if (plain_line(text)) return;
+  if (plain_line(text, plain)) return;
   nc::lex_block_into(text, number, *line_file_, block_);
   block_.file = line_file_ == &file_ ? nullptr : line_file_;
   block_.evaluated = evaluated_;

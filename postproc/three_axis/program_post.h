@@ -129,9 +129,12 @@ class ProgramPost {
     }
     line_file_ = l.file ? l.file : &file_;
     evaluated_ = l.rewritten;
-    line(l.text, l.line, l.newline);
+    line(l.text, l.line, l.newline, l.plain ? &l.words : nullptr);
   }
-  void line(std::string_view text, int number, bool newline);
+  /// `plain`: the line's axis words when the reader read it as a line of
+  /// axis words only (nc::lex_plain_axis_words), else nullptr.
+  void line(std::string_view text, int number, bool newline,
+            const nc::PlainAxisWords* plain = nullptr);
   const nc::Interpreter& interpreter() const { return interp_; }
   /// Writes out what emit() gathered (also on failure: what was done).
   void flush() {
@@ -265,7 +268,7 @@ class ProgramPost {
   /// the last line's: what line() does with it, without a Block, a
   /// BlockEffect or an edit (the usual line of a three-axis CAM program).
   /// Returns false, having changed nothing, for any other line.
-  bool plain_line(std::string_view text);
+  bool plain_line(std::string_view text, const nc::PlainAxisWords* read = nullptr);
   /// A line "G<g> <words>": the one-digit G code in the block's case, a
   /// space when the block spaces its words, the words (one writer for the
   /// added lines of feed moves, expanded cycles and kept arcs).
