@@ -178,6 +178,8 @@ inline double worst_deviation_um(const Canon& run, const std::vector<nc::Motion>
         }
       }
     cursor = best_i;
+    // VOLMAP_DEBUG_DEVIATION=1: every point over 1.25 um, with its play
+    // state and error, on stdout (to find where a run strays).
     if (std::getenv("VOLMAP_DEBUG_DEVIATION") && best > 1.25e-3)
       std::printf(
           "point %zu (%s) at %.4f %.4f %.4f: %.3f um (h %.2f %.2f %.2f, actual-p %.4f %.4f %.4f "
