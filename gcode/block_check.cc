@@ -94,15 +94,24 @@ void BlockCheck::general_steps() {
   if (g[kUnits]) s_.unit_mm = g[kUnits]->code10 == kG20Inch ? 25.4 : 1.0;
   if (g[kToolLength]) tool_length();
   distance_and_coordinate_modes();
-  if (const Word* h = g[kNonModal];
-      h && (h->code10 == kG28Home || h->code10 == kG30SecondHome || h->code10 == kG28_1StoreHome ||
-            h->code10 == kG30_1StoreSecondHome))
-    home(h->code10);
-  if (const Word* o = g[kNonModal];
-      o && (o->code10 == kG10SetOffsets || o->code10 == kG92AxisOffset ||
-            o->code10 == kG92_1AxisOffsetReset || o->code10 == kG92_2AxisOffsetSuspend ||
-            o->code10 == kG92_3AxisOffsetRestore))
-    offsets(o->code10);
+  // Non-modal codes that set state (and use the axis words) before the motion.
+  if (const Word* nm = g[kNonModal]) switch (nm->code10) {
+      case kG28Home:
+      case kG30SecondHome:
+      case kG28_1StoreHome:
+      case kG30_1StoreSecondHome:
+        home(nm->code10);
+        break;
+      case kG10SetOffsets:
+      case kG92AxisOffset:
+      case kG92_1AxisOffsetReset:
+      case kG92_2AxisOffsetSuspend:
+      case kG92_3AxisOffsetRestore:
+        offsets(nm->code10);
+        break;
+      default:
+        break;
+    }
 
   // LinuxCNC asks for Z, R, P and Q only when the block starts a cycle other
   // than the modal one (a G81 restated in G81 keeps the modal values).
@@ -193,8 +202,7 @@ void BlockCheck::distance_and_coordinate_modes() {
   if (g[kCoordSystem]) {
     for (int k = 0; k < 9; ++k)
       if (kWorkOffsetCodes[k] == g[kCoordSystem]->code10) s_.coord_system = k;
-    s_.origin_mm = s_.coord_offset_mm[static_cast<size_t>(s_.coord_system)] +
-                   (s_.g92_applied ? s_.g92_mm : Eigen::Vector3d::Zero());
+    s_.update_origin();
   }
   if (g[kDistance]) s_.absolute = g[kDistance]->code10 == kG90Absolute;
   if (g[kArcDistance]) s_.arc_absolute = g[kArcDistance]->code10 == kG90_1ArcCentreAbsolute;

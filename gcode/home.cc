@@ -30,6 +30,7 @@ void BlockCheck::home(int code10) {
   auto& home = s_.home[static_cast<size_t>(k)];
   auto& known = s_.home_known[static_cast<size_t>(k)];
   if (store) {
+    effect_.stores_home = true;
     // The axes' machine position: the controlled point plus the tool length
     // offset on Z.
     for (int a = 0; a < 3; ++a) {

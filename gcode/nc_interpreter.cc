@@ -23,7 +23,7 @@ Interpreter::Interpreter(ProgramSetup setup, std::string file)
   };
   s_.g92_mm = Eigen::Vector3d(parameter(5211), parameter(5212), parameter(5213));
   s_.g92_applied = parameter(5210) != 0.0;
-  s_.origin_mm = s_.coord_offset_mm[0] + (s_.g92_applied ? s_.g92_mm : Eigen::Vector3d::Zero());
+  s_.update_origin();
   // G28's and G30's positions, where the parameter file gives them
   // (#5161.. and #5181..: X Y Z in mm, A B C in degrees).
   for (int k = 0; k < 2; ++k)
@@ -57,6 +57,7 @@ State Interpreter::check(const Block& b, BlockEffect& effect) const {
   effect.motion_code = -1;
   effect.more_holes.clear();
   effect.homed_axes = 0;
+  effect.stores_home = false;
   effect.offsets_from_position = false;
   State after = s_;
   if (b.percent || b.words.empty()) return after;

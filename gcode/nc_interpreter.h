@@ -74,6 +74,12 @@ struct State {
   /// (#5210: G92 and G92.3 apply it, G92.1 and G92.2 suspend it).
   Eigen::Vector3d g92_mm = Eigen::Vector3d::Zero();
   bool g92_applied = false;
+  /// origin_mm from the active system and the G92 offset (after any of
+  /// them changes).
+  void update_origin() {
+    origin_mm = coord_offset_mm[static_cast<size_t>(coord_system)] +
+                (g92_applied ? g92_mm : Eigen::Vector3d::Zero());
+  }
   bool tool_length_active = false;
   /// The active tool length offset (G43 H, G43.1), mm; 0 under G49 (and
   /// before any G43), so it is the offset in effect either way. As in
@@ -131,6 +137,8 @@ struct BlockEffect {
   /// G92 or G10 L20 with axis words: offsets set from where the tool
   /// stands, which on the machine is where the post's command put it.
   bool offsets_from_position = false;
+  /// G28.1/G30.1: the controller stores where it stands.
+  bool stores_home = false;
   /// G28/G30: bit a for each axis X Y Z that went to its stored position
   /// (the controller stands exactly there after the block, whatever the
   /// correction; the block is written as it is).

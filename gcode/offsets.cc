@@ -74,8 +74,7 @@ void BlockCheck::offsets(int code10) {
     if (code10 == kG92_1AxisOffsetReset) s_.g92_mm.setZero();
     s_.g92_applied = code10 == kG92_3AxisOffsetRestore;
   }
-  s_.origin_mm = s_.coord_offset_mm[static_cast<size_t>(s_.coord_system)] +
-                 (s_.g92_applied ? s_.g92_mm : Eigen::Vector3d::Zero());
+  s_.update_origin();
 }
 
 }  // namespace volmap::nc

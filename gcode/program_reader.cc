@@ -23,9 +23,6 @@ bool is_percent_line(std::string_view t) {
   return !t.empty() && t.front() == '%';
 }
 
-}  // namespace
-
-namespace {
 // The characters that can make a line more than a block of literal words:
 // '#' '[' (parameters, expressions), 'O' (O-words), 'M' (M98/M99), '%'.
 // Most lines have none: one look per character, then nothing else.

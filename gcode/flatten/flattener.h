@@ -109,11 +109,13 @@ class Flattener {
   [[noreturn]] void fail(const Position& p, std::size_t norm_at, const std::string& msg) const;
   /// Reads line p's O-word, if it has one.
   bool read_oword(const Position& p, OWord& o) const;
-  /// The next O-word line at or after p in p's source with `label` and one
-  /// of `keywords`; fails naming `what` when there is none.
-  Position find(Position p, const std::string& label,
-                std::initializer_list<std::string_view> keywords, const Position& from,
-                const char* what) const;
+  /// The next O-word line after `from` in its source with `label` and one
+  /// of `keywords`; fails at `from`, naming the last keyword, when there is
+  /// none.
+  Position find(const Position& from, const std::string& label,
+                std::initializer_list<std::string_view> keywords) const;
+  /// The line after q.
+  static Position after(const Position& q) { return {q.source, q.line + 1}; }
   void execute_oword(const Position& p, const OWord& o);
   void sub_oword(const Position& p, const OWord& o);   ///< sub call endsub return
   void loop_oword(const Position& p, const OWord& o);  ///< do while endwhile repeat endrepeat

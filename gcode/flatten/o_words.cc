@@ -83,12 +83,11 @@ bool Flattener::read_oword(const Position& p, OWord& o) const {
   return true;
 }
 
-Flattener::Position Flattener::find(Position p, const std::string& label,
-                                    std::initializer_list<std::string_view> keywords,
-                                    const Position& from, const char* what) const {
-  const Source& s = *sources_[p.source];
+Flattener::Position Flattener::find(const Position& from, const std::string& label,
+                                    std::initializer_list<std::string_view> keywords) const {
+  const Source& s = *sources_[from.source];
   OWord o;
-  for (++p.line; p.line < s.size(); ++p.line) {
+  for (Position p = after(from); p.line < s.size(); ++p.line) {
     // A cheap look first: most lines are not O-words.
     const std::string_view l = s.line(p.line);
     if (l.find_first_of("oO") == std::string_view::npos) continue;
@@ -97,7 +96,8 @@ Flattener::Position Flattener::find(Position p, const std::string& label,
       if (o.keyword == kw) return p;
   }
   read_oword(from, o);
-  fail(from, o.at, fmt::format("no {} for O{} in {}; add it", what, label, s.file));
+  fail(from, o.at,
+       fmt::format("no {} for O{} in {}; add it", *(keywords.end() - 1), label, s.file));
 }
 
 double Flattener::condition(const Position& p, const OWord& o) const {
@@ -186,10 +186,10 @@ void Flattener::call(const Position& p, const OWord& o) {
   Frame f;
   f.kind = Frame::kCall;
   f.label = o.label;
-  f.start = {p.source, p.line + 1};
+  f.start = after(p);
   frames_.push_back(f);
   params_.push_call(args);
-  pc_ = {sub.source, sub.line + 1};
+  pc_ = after(sub);
 }
 
 void Flattener::execute_oword(const Position& p, const OWord& o) {
@@ -218,8 +218,7 @@ void Flattener::sub_oword(const Position& p, const OWord& o) {
         it != subs_.end() && (it->second.source != p.source || it->second.line != p.line))
       fail(p, o.at, fmt::format("subroutine O{} is defined twice", o.label));
     subs_[o.label] = p;
-    pc_ = find(p, o.label, {"endsub"}, p, "endsub");
-    ++pc_.line;
+    pc_ = after(find(p, o.label, {"endsub"}));
     return;
   }
   if (kw == "call") return call(p, o);
@@ -263,7 +262,7 @@ void Flattener::loop_oword(const Position& p, const OWord& o) {
              "a do loop after a break out of a while loop: LinuxCNC 2.9 runs it only "
              "once (a known interpreter bug); restructure the loops");
       if (c != 0.0)
-        pc_ = {frames_.back().start.source, frames_.back().start.line + 1};
+        pc_ = after(frames_.back().start);
       else
         frames_.pop_back();
       return;
@@ -271,8 +270,7 @@ void Flattener::loop_oword(const Position& p, const OWord& o) {
     if (c != 0.0) {
       frames_.push_back({Frame::kWhile, o.label, p, {}, 0, false});
     } else {
-      pc_ = find(p, o.label, {"endwhile"}, p, "endwhile");
-      ++pc_.line;
+      pc_ = after(find(p, o.label, {"endwhile"}));
     }
     return;
   }
@@ -292,8 +290,7 @@ void Flattener::loop_oword(const Position& p, const OWord& o) {
     if (count > 0) {
       frames_.push_back({Frame::kRepeat, o.label, p, {}, count, false});
     } else {
-      pc_ = find(p, o.label, {"endrepeat"}, p, "endrepeat");
-      ++pc_.line;
+      pc_ = after(find(p, o.label, {"endrepeat"}));
     }
     return;
   }
@@ -303,7 +300,7 @@ void Flattener::loop_oword(const Position& p, const OWord& o) {
       fail(p, o.at, fmt::format("O{} endrepeat without its O{} repeat", o.label, o.label));
     Frame& f = frames_.back();
     if (--f.remaining > 0)
-      pc_ = {f.start.source, f.start.line + 1};
+      pc_ = after(f.start);
     else
       frames_.pop_back();
     return;
@@ -315,7 +312,7 @@ void Flattener::if_oword(const Position& p, const OWord& o) {
   if (kw == "if") {
     const double c = condition(p, o);
     frames_.push_back({Frame::kIf, o.label, p, {}, 0, c != 0.0});
-    if (c == 0.0) pc_ = find(p, o.label, {"elseif", "else", "endif"}, p, "endif");
+    if (c == 0.0) pc_ = find(p, o.label, {"elseif", "else", "endif"});
     return;
   }
   if (kw == "elseif" || kw == "else") {
@@ -323,7 +320,7 @@ void Flattener::if_oword(const Position& p, const OWord& o) {
       fail(p, o.at, fmt::format("O{} {} without its O{} if", o.label, kw, o.label));
     Frame& f = frames_.back();
     if (f.taken) {
-      pc_ = find(p, o.label, {"endif"}, p, "endif");
+      pc_ = find(p, o.label, {"endif"});
       return;
     }
     if (kw == "else") {
@@ -335,7 +332,7 @@ void Flattener::if_oword(const Position& p, const OWord& o) {
     if (c != 0.0)
       frames_.back().taken = true;
     else
-      pc_ = find(p, o.label, {"elseif", "else", "endif"}, p, "endif");
+      pc_ = find(p, o.label, {"elseif", "else", "endif"});
     return;
   }
   if (kw == "endif") {
@@ -381,8 +378,7 @@ void Flattener::jump_oword(const Position& p, const OWord& o) {
     const char* end = f.kind == Frame::kWhile ? "endwhile"
                       : f.kind == Frame::kDo  ? "while"
                                               : "endrepeat";
-    pc_ = find(p, o.label, {end}, p, end);
-    ++pc_.line;
+    pc_ = after(find(p, o.label, {end}));
     return;
   }
   // continue
@@ -391,7 +387,7 @@ void Flattener::jump_oword(const Position& p, const OWord& o) {
     frames_.pop_back();
   } else {
     const char* end = f.kind == Frame::kDo ? "while" : "endrepeat";
-    pc_ = find(p, o.label, {end}, p, end);
+    pc_ = find(p, o.label, {end});
   }
 }
 
@@ -422,7 +418,7 @@ bool Flattener::fanuc_call(const Position& p) {
            "again from the start; end it with M30 (or M2)");
     Frame& f = frames_.back();
     if (--f.remaining > 0) {
-      pc_ = {f.target.source, f.target.line + 1};
+      pc_ = after(f.target);
     } else {
       pc_ = f.start;
       frames_.pop_back();
@@ -467,11 +463,11 @@ bool Flattener::fanuc_call(const Position& p) {
   Frame f;
   f.kind = Frame::kFanucCall;
   f.label = label;
-  f.start = {p.source, p.line + 1};
+  f.start = after(p);
   f.target = target;
   f.remaining = count;
   frames_.push_back(f);
-  pc_ = {target.source, target.line + 1};
+  pc_ = after(target);
   return true;
 }
 

@@ -94,16 +94,6 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
   emitted_known_ = interp_.state().position_known;
 }
 
-namespace {
-bool has_store_home(const nc::Block& b) {
-  for (const nc::Word& w : b.words)
-    if (w.letter == 'G' &&
-        (w.code10 == nc::kG28_1StoreHome || w.code10 == nc::kG30_1StoreSecondHome))
-      return true;
-  return false;
-}
-}  // namespace
-
 void ProgramPost::line(std::string_view raw, int number, bool newline,
                        const nc::PlainAxisWords* plain) {
   current_line_ = number;
@@ -131,12 +121,11 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
     emitted_mm_.z() -= offset - offset_before;
   if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();
-  if (!c.zero())
-    if (b.has('G') && has_store_home(b))
-      throw InputError(*line_file_, number,
-                       "G28.1/G30.1 store where the controller stands, which the correction "
-                       "moves off the nominal point: give the stored position in the parameter "
-                       "file (`var_file`) instead");
+  if (fx.stores_home && !c.zero())
+    throw InputError(*line_file_, number,
+                     "G28.1/G30.1 store where the controller stands, which the correction "
+                     "moves off the nominal point: give the stored position in the parameter "
+                     "file (`var_file`) instead");
   if (fx.offsets_from_position && !c.zero()) {
     offsets_line(text, b, position_before);
     return;
