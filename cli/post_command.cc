@@ -168,7 +168,7 @@ Runner register_post(CLI::App& app) {
         table ? post::post_program(*in, in_name, out.stream(), m, *table, setup, opt)
               : post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
     out.commit();
-    print_read_notes(in_name, r.read);
+    print_read_notes(in_name, r.read, r.flattened_written_as_read);
     if (isatty(2))
       std::cerr << fmt::format("{} lines, {} changed, {} added, max correction {:.2f} um\n",
                                r.lines, r.lines_changed, r.lines_added, r.max_correction_mm * 1e3);

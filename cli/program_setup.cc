@@ -60,13 +60,21 @@ nc::ProgramSetup ProgramSetupOptions::load(const Machine& m) const {
   return setup;
 }
 
-void print_read_notes(const std::string& in_name, const nc::ReadReport& r) {
+void print_read_notes(const std::string& in_name, const nc::ReadReport& r,
+                      bool flattened_written_as_read) {
   if (r.leader_lines > 0)
     std::cerr << fmt::format(
         "note: {}: line{} 1{} before the first '%' (tape leader) written as they are, not run\n",
         in_name, r.leader_lines > 1 ? "s" : "",
         r.leader_lines > 1 ? fmt::format("-{}", r.leader_lines) : "");
-  if (r.flattened_from > 0)
+  if (r.flattened_from > 0 && flattened_written_as_read)
+    std::cerr << fmt::format(
+        "note: {}:{}: from here on the program uses parameters, expressions or O-word control "
+        "flow: evaluated, {} line{} ran as {} block{}; none needed a change, so written as "
+        "read\n",
+        in_name, r.flattened_from, r.flat_source_lines, r.flat_source_lines == 1 ? "" : "s",
+        r.flat_blocks, r.flat_blocks == 1 ? "" : "s");
+  else if (r.flattened_from > 0)
     std::cerr << fmt::format(
         "note: {}:{}: from here on the program uses parameters, expressions or O-word control "
         "flow: written flat (evaluated), {} line{} ran as {} block{}\n",

@@ -27,7 +27,9 @@ struct ProgramSetupOptions {
 };
 
 /// What stderr says about how a program was read: tape leader and trailer
-/// written as they are, the program flattened from a line on.
-void print_read_notes(const std::string& in_name, const nc::ReadReport& r);
+/// written as they are, the program flattened from a line on (or, when no
+/// line of it needed a change, evaluated and written as it was read).
+void print_read_notes(const std::string& in_name, const nc::ReadReport& r,
+                      bool flattened_written_as_read);
 
 }  // namespace volmap::cli

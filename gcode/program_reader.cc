@@ -178,6 +178,7 @@ void ProgramReader::start_flattening(std::string_view first, bool newline) {
     data.resize(at + static_cast<std::size_t>(in_.gcount()));
     if (in_.gcount() == 0) eof_ = true;
   }
+  original_rest_ = data;
   // What follows a closing '%' is not run: set aside, handed out verbatim.
   if (opened_) {
     std::size_t b = first.size() + (newline ? 1 : 0);  // (the first line is not a '%' line)
@@ -213,7 +214,7 @@ bool ProgramReader::next(ProgramLine& out) {
     started_ = true;
     find_leader();
     if (report_.byte_order_mark) {
-      out = ProgramLine{kByteOrderMark, &file_, 1, false, true, false, false, {}};
+      out = ProgramLine{kByteOrderMark, &file_, 1, false, true, false, false, false, {}};
       return true;
     }
   }
@@ -230,11 +231,12 @@ bool ProgramReader::next(ProgramLine& out) {
                         k > 0,
                         false,
                         false,
+                        true,
                         {}};
       return true;
     }
     report_.flat_blocks = flat_->emitted_lines();
-    out = ProgramLine{f.text, f.file, f.line, f.newline, f.verbatim, f.rewritten, false, {}};
+    out = ProgramLine{f.text, f.file, f.line, f.newline, f.verbatim, f.rewritten, true, false, {}};
     return true;
   }
   std::string_view text;
@@ -244,7 +246,7 @@ bool ProgramReader::next(ProgramLine& out) {
   out.file = &file_;
   out.line = number_;
   out.newline = newline;
-  out.verbatim = out.rewritten = out.plain = false;
+  out.verbatim = out.rewritten = out.plain = out.flattened = false;
   if (leader_left_ > 0) {
     --leader_left_;
     out.verbatim = true;

@@ -33,6 +33,9 @@ struct ProgramLine {
   bool newline = true;     ///< a '\n' followed it
   bool verbatim = false;   ///< not run by the controller: write it as it is, do not interpret
   bool rewritten = false;  ///< evaluated by the flattener
+  /// From the flattened part of the program (ProgramReader::original_rest()
+  /// holds what it was flattened from), its trailer included.
+  bool flattened = false;
   /// A line of axis words X Y Z only (nc::lex_plain_axis_words), read
   /// already: `words` holds them. Most lines of a CAM program are such.
   bool plain = false;
@@ -61,6 +64,10 @@ class ProgramReader {
   void set_max_executed_lines(long n) { max_executed_ = n; }
   const ReadReport& report() const { return report_; }
   const std::string& file() const { return file_; }
+  /// The program's text from the line where flattening began to its end,
+  /// as read (empty if it did not begin): what a post that changed none
+  /// of the flattened lines writes back instead of them.
+  const std::string& original_rest() const { return original_rest_; }
 
  private:
   /// The next physical line from the stream; false at its end.
@@ -85,6 +92,7 @@ class ProgramReader {
   std::unique_ptr<flatten::Source> trailer_;  ///< after the closing '%' of a flattened program
   std::size_t trailer_next_ = 0;
   ReadReport report_;
+  std::string original_rest_;
   long max_executed_ = flatten::kMaxExecutedLines;
 };
 

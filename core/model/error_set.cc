@@ -143,6 +143,20 @@ void prepare_lookup(AxisErrorTable& table) {
   table.uniform_inv_step = 1.0 / step;
 }
 
+bool errors_all_zero(const ErrorSet& errors) {
+  for (const auto& [name, value] : errors.location)
+    if (value != 0.0) return false;
+  auto zero_table = [](const AxisErrorTable& t) {
+    for (const auto& row : t.value)
+      for (double v : row)
+        if (v != 0.0) return false;
+    return true;
+  };
+  for (const auto& a : errors.axis)
+    if (a && !(zero_table(a->plus) && zero_table(a->minus))) return false;
+  return true;
+}
+
 void prepare_lookup(ErrorSet& errors) {
   for (auto& a : errors.axis) {
     if (!a) continue;

@@ -89,6 +89,12 @@ struct ErrorSet {
   }
 };
 
+/// Whether the errors are zero everywhere: no location error other than 0
+/// and no table value other than 0 (no entries at all, or a file of
+/// zeros). Such a machine is where its axes say; the post-processors then
+/// give a program back as it is.
+bool errors_all_zero(const ErrorSet& errors);
+
 /// Sets the derived lookup fields of a table (uniform_inv_step). Call after
 /// filling position; evaluation is correct without it, only slower.
 void prepare_lookup(AxisErrorTable& table);

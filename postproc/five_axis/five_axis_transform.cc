@@ -9,15 +9,9 @@
 
 namespace volmap::post {
 
-bool error_set_empty(const ErrorSet& errors) {
-  bool any = !errors.location.empty();
-  for (const auto& a : errors.axis) any = any || a.has_value();
-  return !any;
-}
-
 FiveAxisTransform::FiveAxisTransform(const Machine& machine, const ErrorSet& errors,
                                      OutsidePolicy outside, CorrectionOptions correction)
-    : kin_(machine), zero_(error_set_empty(errors)) {
+    : kin_(machine), zero_(errors_all_zero(errors)) {
   if (!kin_.has_rotary_axes())
     throw std::invalid_argument("the five-axis post needs a machine with two rotary axes");
   if (!zero_) {

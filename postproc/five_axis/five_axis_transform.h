@@ -20,11 +20,6 @@
 
 namespace volmap::post {
 
-/// True when the error set holds no data at all (no axis table, no
-/// location error): the post then writes the nominal backward
-/// transformation exactly, without evaluating a model.
-bool error_set_empty(const ErrorSet& errors);
-
 class FiveAxisTransform {
  public:
   /// Throws std::invalid_argument for a machine the backward transformation
@@ -44,6 +39,8 @@ class FiveAxisTransform {
 
   const Machine& machine() const { return kin_.machine(); }
   const Kinematics& kinematics() const { return kin_; }
+  /// The errors are zero everywhere (errors_all_zero): the post writes the
+  /// nominal backward transformation exactly, without evaluating a model.
   bool zero() const { return zero_; }
 
   /// Nominal axes for tool pose v after `previous` (selection policy of

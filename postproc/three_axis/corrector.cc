@@ -97,9 +97,7 @@ Corrector::Corrector(const Machine& machine, const ErrorSet& errors, double tool
   with_tool.tool_length_mm = tool_length_mm;
   const Eigen::Vector3d tipL = nominal_forward(with_tool, zero).tip_mm;
   axis_shift_mm_ = M_u_tip_ * (tip0 - tipL);
-  bool any = !errors.location.empty();
-  for (const auto& a : errors.axis) any = any || a.has_value();
-  zero_ = !any;
+  zero_ = errors_all_zero(errors);
   for (int a = 0; a < 3; ++a) {
     const AxisErrors* ax = errors.errors_of(machine.axis_order[static_cast<size_t>(a)]);
     bidirectional_[static_cast<size_t>(a)] = ax && ax->bidirectional();

@@ -38,7 +38,7 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
     post.flush();
     throw;
   }
-  post.flush();
+  post.finish(reader.original_rest());
   PostReport report = post.report();
   report.read = reader.report();
   return report;

@@ -67,6 +67,9 @@ struct PostReport {
   std::uint64_t lines_added = 0;
   std::uint64_t points_corrected = 0;
   double max_correction_mm = 0.0;
+  /// The program was flattened, but no line of the flattened part needed a
+  /// change: that part was written back as it was read, not flat.
+  bool flattened_written_as_read = false;
   /// How the program was read: its tape frame, whether it was flattened.
   nc::ReadReport read;
 };

@@ -120,22 +120,38 @@ class ProgramPost {
   /// One line of the program as the reader hands it out (a block, or
   /// verbatim text such as tape leader).
   void line(const nc::ProgramLine& l) {
+    if (l.flattened && !hold_begun_) begin_hold();
+    const std::size_t before = out_buffer_.size();
     if (l.verbatim) {
       ++report_.lines;
       line_ending_[0] = '\n';
       line_ending_size_ = l.newline ? 1 : 0;
       emit(l.text);
-      return;
+    } else {
+      line_file_ = l.file ? l.file : &file_;
+      evaluated_ = l.rewritten;
+      line(l.text, l.line, l.newline, l.plain ? &l.words : nullptr);
     }
-    line_file_ = l.file ? l.file : &file_;
-    evaluated_ = l.rewritten;
-    line(l.text, l.line, l.newline, l.plain ? &l.words : nullptr);
+    if (holding_) check_held_line(l, before);
   }
   /// `plain`: the line's axis words when the reader read it as a line of
   /// axis words only (nc::lex_plain_axis_words), else nullptr.
   void line(std::string_view text, int number, bool newline,
             const nc::PlainAxisWords* plain = nullptr);
   const nc::Interpreter& interpreter() const { return interp_; }
+  /// The end of the program: a flattened part in which the post changed no
+  /// line goes out as it was read (`original_rest`, the reader's), not flat.
+  void finish(const std::string& original_rest) {
+    // (A flattened part that ran as no block, such as a file of subroutine
+    // definitions only, changed nothing either.)
+    if (holding_ || (!hold_begun_ && !original_rest.empty())) {
+      out_buffer_.clear();
+      out_.write(original_rest.data(), static_cast<std::streamsize>(original_rest.size()));
+      report_.flattened_written_as_read = true;
+      holding_ = false;
+    }
+    flush();
+  }
   /// Writes out what emit() gathered (also on failure: what was done).
   void flush() {
     out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
@@ -400,7 +416,25 @@ class ProgramPost {
   void end_line(char* p) {
     std::memcpy(p, line_ending_, 2);  // room for both was made; only the ending's length counts
     out_buffer_.commit(p + line_ending_size_);
-    if (out_buffer_.size() >= kFlushAt) flush();
+    if (out_buffer_.size() >= kFlushAt && !holding_) flush();
+  }
+  /// The flattened part is held back (not flushed) until a line of it
+  /// comes out other than it went in: until then, finish() may write the
+  /// program as it was read instead.
+  void begin_hold() {
+    hold_begun_ = true;
+    flush();
+    holding_ = true;
+  }
+  /// Ends the hold when line l did not come out as it went in (from byte
+  /// `before` of the buffer on).
+  void check_held_line(const nc::ProgramLine& l, std::size_t before) {
+    const std::size_t n = out_buffer_.size() - before;
+    const std::size_t want = l.text.size() + (l.newline ? 1 : 0);
+    if (n == want && std::memcmp(out_buffer_.data() + before, l.text.data(), l.text.size()) == 0 &&
+        (!l.newline || out_buffer_.data()[before + n - 1] == '\n'))
+      return;
+    holding_ = false;
   }
   void emit(std::string_view text) {
     char* p = out_buffer_.room(text.size() + 2);
@@ -429,6 +463,8 @@ class ProgramPost {
   char line_ending_[2] = {};  ///< the line's ending as read: "", "\n", "\r" or "\r\n"
   std::size_t line_ending_size_ = 0;
   CharBuffer out_buffer_;
+  bool hold_begun_ = false;  ///< the first flattened line came
+  bool holding_ = false;     ///< every flattened line so far came out as it went in
   nc::Block block_;  ///< the line being read (storage reused line after line)
   struct Pending {
     double s0, s1;
