@@ -77,6 +77,7 @@ Runner register_post(CLI::App& app) {
     bool clamp = false;
     bool expand_cycles = false;
     bool keep_arcs = false;
+    bool linearize_arcs = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand("post",
@@ -107,11 +108,14 @@ Runner register_post(CLI::App& app) {
   sub->add_flag("--expand-cycles", o->expand_cycles,
                 "Write canned cycles G73 G81 G82 G83 G85 G89 out as their moves (LinuxCNC's), so "
                 "the feed into the hole keeps the tolerance too (three axes)");
+  auto* linearize = sub->add_flag(
+      "--linearize-arcs", o->linearize_arcs,
+      "Write every G2/G3 arc as straight G1 pieces within the tolerance (default: arcs stay arcs, "
+      "corrected end point and centre, cut only where the error field or an axis's lost motion "
+      "needs it; three axes)");
   sub->add_flag("--keep-arcs", o->keep_arcs,
-                "Keep G2/G3 arcs as arcs (corrected end point and centre) where the arc the "
-                "controller runs stays within "
-                "the tolerance and no axis reverses on it; others are split into lines as by "
-                "default (three axes)");
+                "Arcs stay arcs: the default, the flag is kept for scripts that give it")
+      ->excludes(linearize);
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
   sub->footer(
@@ -125,7 +129,8 @@ Runner register_post(CLI::App& app) {
     const Machine m = load_machine_json(o->machine);
     if (o->five.applies(m)) {
       if (o->expand_cycles) throw UsageError("--expand-cycles is for three-axis programs");
-      if (o->keep_arcs) throw UsageError("--keep-arcs is for three-axis programs");
+      if (o->keep_arcs || o->linearize_arcs)
+        throw UsageError("--keep-arcs and --linearize-arcs are for three-axis programs");
       return run_five_axis(*o, o->five.place_part(m));
     }
     if (o->errors.empty() && o->table.empty()) throw UsageError("post needs --errors or --table");
@@ -147,7 +152,7 @@ Runner register_post(CLI::App& app) {
     opt.decimals = o->decimals;
     opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
     opt.expand_cycles = o->expand_cycles;
-    opt.keep_arcs = o->keep_arcs;
+    opt.keep_arcs = !o->linearize_arcs;
     opt.subroutine_path = o->placement.subroutine_dirs(o->in);
     std::ifstream file_in;
     std::istream* in = &std::cin;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 namespace volmap::nc {
 
@@ -163,21 +164,38 @@ std::string apply_edit(const Block& b, const BlockEdit& edit) {
 }
 
 void apply_edit(const Block& b, const BlockEdit& edit, std::string& out) {
-  std::vector<int> sorted;
-  const std::vector<int>* removep = &edit.remove;
-  if (!std::is_sorted(edit.remove.begin(), edit.remove.end())) {
-    sorted = edit.remove;
-    std::sort(sorted.begin(), sorted.end());
-    removep = &sorted;
-  }
-  const std::vector<int>& remove = *removep;
+  // The words the edit touches, in the line's order: removed (-1) or
+  // renumbered (their index in edit.renumber).
+  std::vector<std::pair<int, int>> touched;
+  touched.reserve(edit.remove.size() + edit.renumber.size());
+  for (int idx : edit.remove) touched.emplace_back(idx, -1);
+  for (std::size_t k = 0; k < edit.renumber.size(); ++k)
+    touched.emplace_back(edit.renumber[k].first, static_cast<int>(k));
+  constexpr int kInsertAfter = std::numeric_limits<int>::max();  // after the word's own edit
+  if (edit.remove.empty() && edit.insert_after >= 0 && !edit.insert.empty())
+    touched.emplace_back(edit.insert_after, kInsertAfter);
+  std::sort(touched.begin(), touched.end());
   const std::string& t = b.text;
   const bool spaces = block_uses_spaces(b);
   out.clear();
   size_t pos = 0;
   bool inserted = edit.insert.empty();
-  for (int idx : remove) {
+  for (const auto& [idx, renumbered] : touched) {
     const Word& w = b.words[static_cast<size_t>(idx)];
+    if (renumbered == kInsertAfter) {
+      out.append(t, pos, w.end - pos);
+      if (spaces) out += ' ';
+      out += edit.insert;
+      inserted = true;
+      pos = w.end;
+      continue;
+    }
+    if (renumbered >= 0) {
+      out.append(t, pos, w.begin + 1 - pos);  // up to and with the letter
+      out += edit.renumber[static_cast<size_t>(renumbered)].second;
+      pos = w.end;
+      continue;
+    }
     size_t cut = w.begin;
     if (cut > pos && t[cut - 1] == ' ') --cut;  // the separating space goes with the word
     out.append(t, pos, cut - pos);

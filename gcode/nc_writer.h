@@ -8,6 +8,7 @@
 #include <cstring>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "gcode/nc_block.h"
@@ -92,6 +93,12 @@ inline char* format_number_fast(double value, int decimals, char* out) {
 struct BlockEdit {
   std::vector<int> remove;
   std::string insert;
+  /// Words whose number is replaced in place (index, the new number's
+  /// text): the letter and everything around the word stay as they were.
+  std::vector<std::pair<int, std::string>> renumber;
+  /// With nothing removed: the insert goes after this word (-1: after the
+  /// last word, before a trailing comment).
+  int insert_after = -1;
 };
 
 /// Applies an edit to the block's text. Separators: a deleted word takes one

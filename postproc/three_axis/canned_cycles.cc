@@ -21,44 +21,76 @@ namespace volmap::post {
 // taken from where the controller stands when it reads it: X Y from over
 // the hole before, R from that level (LinuxCNC: R above the level the tool
 // is at, Z below R), so the rounding of each number is carried into the
-// next instead of adding up.
-void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c,
-                              bool lower, bool spaces, int dec) {
+// next instead of adding up. A block none of whose holes needs a change
+// stays as written, L and polar words with it.
+void ProgramPost::cycle_holes(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                              const Corrector& c, bool lower, bool spaces, int dec) {
   const nc::State& s = interp_.state();
   const double unit = s.unit_mm;
   const Vector3d& wo = interp_.work_offset();
+  enter_cycle_run();
+  // Every hole's words first, and whether the block as written takes the
+  // controller within half an output unit of them: its nominal holes, moved
+  // under G91 by where the controller stands off the nominal start (X Y)
+  // and off the nominal initial level (Z R).
+  struct Hole {
+    double x, y, z, r;  // the words
+    Vector3d at;        // where the controller takes them to: over the hole, at R
+  };
+  std::vector<Hole> holes(1 + fx.more_holes.size());
+  Vector3d chain = emitted_mm_;
+  const Vector3d off =
+      s.absolute ? Vector3d::Zero()
+                 : Vector3d(emitted_mm_.x() - fx.motion.start_mm.x(),
+                            emitted_mm_.y() - fx.motion.start_mm.y(), ctrl_il_mm_ - s.cycle_il_mm);
+  const double half_mm = half_unit(dec) * unit;
+  bool changed = false;
+  for (size_t k = 0; k < holes.size(); ++k) {
+    const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[k - 1];
+    // The traverse over the hole sets X and Y's approach; the feed goes down.
+    ApproachDirections d;
+    const Vector3d cmd = position_command(c, h.start_mm, h.end_mm, true, d);
+    const Vector3d r_cmd = command(c, Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm), d);
+    Hole& w = holes[k];
+    double bottom;  // the Z the words take the tool down to
+    if (s.absolute) {
+      w.x = written((cmd.x() - wo.x()) / unit, dec);
+      w.y = written((cmd.y() - wo.y()) / unit, dec);
+      w.r = written((r_cmd.z() - wo.z()) / unit, dec);
+      w.z = written((cmd.z() - wo.z()) / unit, dec);
+      w.at = Vector3d(w.x * unit + wo.x(), w.y * unit + wo.y(), w.r * unit + wo.z());
+      bottom = w.z * unit + wo.z();
+    } else {
+      w.x = written((cmd.x() - chain.x()) / unit, dec);
+      w.y = written((cmd.y() - chain.y()) / unit, dec);
+      w.r = written((r_cmd.z() - ctrl_il_mm_) / unit, dec);
+      w.at = Vector3d(chain.x() + w.x * unit, chain.y() + w.y * unit, ctrl_il_mm_ + w.r * unit);
+      w.z = written((cmd.z() - w.at.z()) / unit, dec);
+      bottom = w.at.z() + w.z * unit;
+    }
+    changed = changed || !(std::abs(w.at.x() - (h.end_mm.x() + off.x())) < half_mm) ||
+              !(std::abs(w.at.y() - (h.end_mm.y() + off.y())) < half_mm) ||
+              !(std::abs(w.at.z() - (h.r_mm + off.z())) < half_mm) ||
+              !(std::abs(bottom - (h.end_mm.z() + off.z())) < half_mm);
+    // After the hole: G99 at R, G98 at the initial level or R if higher.
+    chain = Vector3d(w.at.x(), w.at.y(), s.g98 ? std::max(ctrl_il_mm_, w.at.z()) : w.at.z());
+  }
+  if (!changed) {
+    write_unchanged(text, b, fx);
+    if (!s.absolute) emitted_mm_ += Vector3d(off.x(), off.y(), 0.0);
+    return;
+  }
   std::string extra;  // the block's P and Q words, for every repeat
   for (const nc::Word& w : b.words)
     if (w.letter == 'P' || w.letter == 'Q') {
       if (spaces) extra += ' ';
       extra += b.text.substr(w.begin, w.end - w.begin);
     }
-  enter_cycle_run();
-  const size_t holes = 1 + fx.more_holes.size();
-  for (size_t k = 0; k < holes; ++k) {
-    const nc::Motion& h = k == 0 ? fx.motion : fx.more_holes[k - 1];
-    // The traverse over the hole sets X and Y's approach; the feed goes down.
-    ApproachDirections d;
-    const Vector3d cmd = position_command(c, h.start_mm, h.end_mm, true, d);
-    const Vector3d r_cmd = command(c, Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm), d);
-    double x, y, r, z;  // the words
-    Vector3d at;        // where the controller takes them to: over the hole, at R
-    if (s.absolute) {
-      x = written((cmd.x() - wo.x()) / unit, dec);
-      y = written((cmd.y() - wo.y()) / unit, dec);
-      r = written((r_cmd.z() - wo.z()) / unit, dec);
-      z = written((cmd.z() - wo.z()) / unit, dec);
-      at = Vector3d(x * unit + wo.x(), y * unit + wo.y(), r * unit + wo.z());
-    } else {
-      x = written((cmd.x() - emitted_mm_.x()) / unit, dec);
-      y = written((cmd.y() - emitted_mm_.y()) / unit, dec);
-      r = written((r_cmd.z() - ctrl_il_mm_) / unit, dec);
-      at = Vector3d(emitted_mm_.x() + x * unit, emitted_mm_.y() + y * unit, ctrl_il_mm_ + r * unit);
-      z = written((cmd.z() - at.z()) / unit, dec);
-    }
+  for (size_t k = 0; k < holes.size(); ++k) {
+    const Hole& h = holes[k];
     std::string words;
     const char* letters = lower ? "xyzr" : "XYZR";
-    const double values[4] = {x, y, z, r};
+    const double values[4] = {h.x, h.y, h.z, h.r};
     for (int i = 0; i < 4; ++i) {
       if (i > 0 && spaces) words += ' ';
       words += letters[i];
@@ -78,9 +110,9 @@ void ProgramPost::cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, con
       emit(words + extra);
       ++report_.lines_added;
     }
-    // After the hole: G99 at R, G98 at the initial level or R if higher.
-    emitted_mm_ = Vector3d(at.x(), at.y(), s.g98 ? std::max(ctrl_il_mm_, at.z()) : at.z());
   }
+  emitted_mm_ = chain;
+  emitted_exact_ = false;
   emitted_known_ = true;
 }
 
@@ -203,7 +235,7 @@ void ProgramPost::expanded_rapid(const Corrector& c, const Vector3d& from, const
   append_axis_words(cmd, false, lower, spaces, words_);
   emit_move(0, lower, spaces, words_.view());
   ++report_.lines_added;
-  emitted_mm_ = reached(cmd, false);
+  set_emitted(cmd, false);
 }
 
 void ProgramPost::expanded_feed(const Corrector& c, const Vector3d& from, const Vector3d& to,
@@ -219,7 +251,7 @@ void ProgramPost::expanded_feed(const Corrector& c, const Vector3d& from, const 
     append_axis_words(piece.command_mm, false, lower, spaces, words_);
     emit_move(1, lower, spaces, words_.view());
     ++report_.lines_added;
-    emitted_mm_ = reached(piece.command_mm, false);
+    set_emitted(piece.command_mm, false);
   }
 }
 

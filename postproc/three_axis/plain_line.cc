@@ -26,28 +26,40 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
   ctrl_il_known_ = false;  // the run of cycle blocks has ended
   const Corrector& c = *last_corrector_;
   const std::vector<Piece>& pieces = segment(c, plain_motion_, emitted_mm_);
-  if (pieces.size() == 1) {
-    bool needed = false;
+  unsigned needed = 0;
+  for (int a = 0; a < 3; ++a)
+    if (axis_needs_word(a, pieces[0].command_mm,
+                        (words.given >> a & 1u) ? &words.value[a] : nullptr, false))
+      needed |= 1u << a;
+  if (needed == 0 && pieces.size() == 1) {
+    // unchanged(): the line as written, the controller where its words say
+    // (the move's end)
+    emit(text);
     for (int a = 0; a < 3; ++a)
-      needed =
-          needed || axis_needs_word(a, pieces[0].command_mm,
-                                    (words.given >> a & 1u) ? &words.value[a] : nullptr, false);
-    if (!needed) {  // unchanged(): the line as written, the controller where its words say (the
-                    // move's end)
-      emit(text);
-      for (int a = 0; a < 3; ++a)
-        if (words.given >> a & 1u) emitted_mm_[a] = plain_motion_.end_mm[a];
-      return true;
-    }
+      if (words.given >> a & 1u) emitted_mm_[a] = plain_motion_.end_mm[a];
+    emitted_exact_ = true;
+    return true;
   }
-  // The line's words are all axis words: the edited line is the first
-  // piece's words alone (apply_edit_to removes every word, separating
-  // spaces with them, and puts the insert in their place).
+  if (needed != 7u) {
+    // Some word keeps its text: the fewest changes, through a Block
+    // (first_piece_minimal; seldom with real errors, which move every axis).
+    nc::lex_block_into(text, current_line_, *line_file_, block_);
+    block_.file = line_file_ == &file_ ? nullptr : line_file_;
+    fx_.motion = plain_motion_;
+    fx_.g53 = false;
+    fx_.homed_axes = 0;
+    fx_.has_motion = true;
+    first_piece_minimal(text, block_, fx_, block_style(block_), pieces);
+    return true;
+  }
+  // Every axis changes: the edited line is the first piece's words alone
+  // (the line's words are all axis words, X Y Z in that order).
   previous_words_.clear();
   append_axis_words(pieces[0].command_mm, false, words.lower, words.spaced, previous_words_);
   emit(previous_words_.view());
   ++report_.lines_changed;
   emitted_mm_ = pieces[0].command_mm;  // reached(): G90
+  emitted_exact_ = false;
   emit_following_pieces(
       pieces, false, words.lower, words.spaced, true, [&](size_t k, CharBuffer& w) {
         w.clear();

@@ -36,39 +36,38 @@ void ProgramPost::positioning_axis_words(const nc::Block& b, const nc::BlockEffe
   const nc::State& s = interp_.state();
   const int dec = decimals();
   const double half = half_unit(dec);
-  // A polar block (@ ^) is always rewritten as X Y: under G91 the
-  // controller would apply its increments to the corrected point, not the
-  // nominal one, and X Y next to @ ^ is an error.
-  const bool polar = b.has('@') || b.has('^');
+  // A polar block (@ ^) that needs a change is rewritten as X Y: under G91
+  // the controller would apply its increments to the corrected point, not
+  // the nominal one, and X Y next to @ ^ is an error.
+  const bool polar = (b.has('@') || b.has('^')) && polar_needs_change(b, fx, cmd);
   if (polar)
     for (char L : {'@', '^'})
       if (const int i = word_index(b, L); i >= 0) e.edit.remove.push_back(i);
   for (int a = 0; a < 3; ++a) {
-    const int idx = word_index(b, "XYZ"[a]);
+    const int idx = style.axis_index[a];
     const double new_value = program_value(a, cmd[a], fx.g53);
     // A canned cycle's Z is the hole bottom, not where the tool stays.
-    e.needed[static_cast<size_t>(a)] =
+    const bool needed =
         m.kind == nc::MotionKind::kCycle && a == 2
             ? (idx >= 0 ? std::abs(new_value - b.words[static_cast<size_t>(idx)].value) >= half
                         : std::abs(cmd.z() - m.end_mm.z()) >= half * s.unit_mm)
             : block_needs_word(b, style, fx.g53, a, cmd) || (polar && a < 2);
-    e.changed = e.changed || e.needed[static_cast<size_t>(a)];
-  }
-  // When any axis changes, the axis words are written together in X Y Z
-  // order; an unchanged one keeps its original text.
-  for (int a = 0; a < 3 && e.changed; ++a) {
-    const int idx = word_index(b, "XYZ"[a]);
-    if (!e.needed[static_cast<size_t>(a)] && idx < 0) continue;
-    if (idx >= 0) e.edit.remove.push_back(idx);
-    if (!e.insert.empty() && style.spaces) e.insert += ' ';
-    if (e.needed[static_cast<size_t>(a)]) {
-      e.insert += style.lower ? "xyz"[a] : "XYZ"[a];
-      e.insert += nc::format_number(program_value(a, cmd[a], fx.g53), dec);
+    e.needed[static_cast<size_t>(a)] = needed;
+    e.changed = e.changed || needed;
+    if (!needed) continue;
+    // The fewest changes: a word renumbered in place, an absent one added.
+    const std::string number = nc::format_number(new_value, dec);
+    if (idx >= 0) {
+      e.edit.renumber.emplace_back(idx, number);
     } else {
-      const nc::Word& w = b.words[static_cast<size_t>(idx)];
-      e.insert += b.text.substr(w.begin, w.end - w.begin);
+      if (!e.insert.empty() && style.spaces) e.insert += ' ';
+      e.insert += style.lower ? "xyz"[a] : "XYZ"[a];
+      e.insert += number;
     }
   }
+  int last_axis_word = -1;
+  for (int a = 0; a < 3; ++a) last_axis_word = std::max(last_axis_word, style.axis_index[a]);
+  e.edit.insert_after = last_axis_word;
 }
 
 double ProgramPost::cycle_r_plane(const nc::Block& b, const nc::Motion& m, const Corrector& c,
@@ -91,10 +90,13 @@ double ProgramPost::cycle_r_plane(const nc::Block& b, const nc::Motion& m, const
       e.insert += lower ? 'z' : 'Z';
       e.insert += nc::format_number(program_value(2, cmd.z(), false), dec);
     }
-    if (const int ri = word_index(b, 'R'); ri >= 0) e.edit.remove.push_back(ri);
-    if (!e.insert.empty() && spaces) e.insert += ' ';
-    e.insert += lower ? 'r' : 'R';
-    e.insert += nc::format_number(r_new, dec);
+    if (const int ri = word_index(b, 'R'); ri >= 0) {
+      e.edit.renumber.emplace_back(ri, nc::format_number(r_new, dec));
+    } else {
+      if (!e.insert.empty() && spaces) e.insert += ' ';
+      e.insert += lower ? 'r' : 'R';
+      e.insert += nc::format_number(r_new, dec);
+    }
     e.changed = true;
   }
   // Where the controller ends: G99 at the R it reads, G98 at the initial
@@ -122,6 +124,7 @@ void ProgramPost::positioning_line(std::string_view text, const nc::Block& b,
   e.edit.insert = e.insert;
   emit(nc::apply_edit(b, e.edit));
   ++report_.lines_changed;
+  emitted_exact_ = !cycle && !s.absolute;
   if (cycle) {
     emitted_mm_ = Vector3d(cmd.x(), cmd.y(), cycle_clear_mm);
   } else if (s.absolute) {

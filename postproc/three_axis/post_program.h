@@ -46,12 +46,13 @@ struct PostOptions {
   /// out of it for G85 G89) keeps the tolerance too, not only the hole's
   /// bottom. Other cycles (pecking, spindle stops) are refused with it.
   bool expand_cycles = false;
-  /// Arcs and helices (G2 G3) stay arcs where the error field allows: the
-  /// end point corrected, the centre moved by the mean correction of its
-  /// ends, the arc the controller then runs checked against the nominal
-  /// one (docs/post.md "Arcs kept as arcs"); others are linearised within
-  /// the tolerance as by default.
-  bool keep_arcs = false;
+  /// Arcs and helices (G2 G3) stay arcs (the default): the end point
+  /// corrected, the centre moved by the mean correction of its ends, cut
+  /// only where lost motion or the field needs it, each arc the controller
+  /// then runs checked against the nominal one (docs/post.md "Arcs kept as
+  /// arcs"); an arc that cannot be kept so is linearised within the
+  /// tolerance. false (--linearize-arcs): every arc linearised.
+  bool keep_arcs = true;
   /// Plain lines of axis words take the post's shortcut past the lexer's
   /// Block, the interpreter's checks and the line editor (docs/post.md
   /// "Speed"); the output is the same byte for byte. false: every line the
@@ -67,6 +68,9 @@ struct PostReport {
   std::uint64_t lines_added = 0;
   std::uint64_t points_corrected = 0;
   double max_correction_mm = 0.0;
+  std::uint64_t arcs_kept = 0;        ///< arcs written as one arc
+  std::uint64_t arcs_split = 0;       ///< arcs written as several arcs
+  std::uint64_t arcs_linearized = 0;  ///< arcs written as straight pieces
   /// The program was flattened, but no line of the flattened part needed a
   /// change: that part was written back as it was read, not flat.
   bool flattened_written_as_read = false;

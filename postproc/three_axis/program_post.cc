@@ -82,8 +82,15 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
       emitted_mm_ = interp_.state().position_mm;
     } else {
       const nc::State& st = interp_.state();
+      const nc::Motion& m = fx.motion;
+      const bool polar = b.has('@') || b.has('^');
       for (int a = 0; a < 3; ++a) {
         const nc::Word* w = b.find("XYZ"[a]);
+        if (polar && a < 2) {  // @ ^ name X and Y: the nominal end, or its increment
+          emitted_mm_[a] =
+              st.absolute ? m.end_mm[a] : emitted_mm_[a] + (m.end_mm[a] - m.start_mm[a]);
+          continue;
+        }
         if (!w) continue;
         emitted_mm_[a] = st.absolute
                              ? w->value * st.unit_mm + (fx.g53 ? 0.0 : interp_.work_offset()[a])
@@ -91,6 +98,7 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
       }
     }
   }
+  if (fx.has_motion) emitted_exact_ = true;
   emitted_known_ = interp_.state().position_known;
 }
 
@@ -154,7 +162,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
   }
   if (m.kind == nc::MotionKind::kCycle &&
       (!fx.more_holes.empty() || !interp_.state().absolute || b.find('@') || b.find('^'))) {
-    cycle_holes(b, fx, c, style.lower, style.spaces, decimals());
+    cycle_holes(text, b, fx, c, style.lower, style.spaces, decimals());
     return;
   }
   if (m.kind == nc::MotionKind::kRapid || m.kind == nc::MotionKind::kCycle) {
@@ -167,6 +175,115 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
                      "a feed move and a stop code (M0/M1/M2/M30/M60) in one block; "
                      "put the stop code on its own line");
   feed_line(text, b, fx, c, style);
+}
+
+bool ProgramPost::minimal_axis_words(const nc::Block& b, const BlockStyle& style, bool g53,
+                                     const Vector3d& cmd, nc::BlockEdit& e,
+                                     Vector3d& reached_mm) const {
+  const nc::State& s = interp_.state();
+  const int dec = decimals();
+  bool changed = false;
+  int last_axis_word = -1;
+  for (int a = 0; a < 3; ++a) last_axis_word = std::max(last_axis_word, style.axis_index[a]);
+  for (int a = 0; a < 3; ++a) {
+    const int idx = style.axis_index[a];
+    const double origin = s.absolute ? (g53 ? 0.0 : interp_.work_offset()[a]) : emitted_mm_[a];
+    double value;  // what the controller reads for this axis, program units
+    if (block_needs_word(b, style, g53, a, cmd)) {
+      const std::string number = nc::format_number(program_value(a, cmd[a], g53), dec);
+      value = std::strtod(number.c_str(), nullptr);
+      if (idx >= 0) {
+        e.renumber.emplace_back(idx, number);
+      } else {
+        if (!e.insert.empty() && style.spaces) e.insert += ' ';
+        e.insert += style.lower ? "xyz"[a] : "XYZ"[a];
+        e.insert += number;
+      }
+      changed = true;
+    } else if (idx >= 0) {
+      value = b.words[static_cast<size_t>(idx)].value;
+    } else {
+      reached_mm[a] = emitted_mm_[a];  // not named: it stays
+      continue;
+    }
+    reached_mm[a] = origin + value * s.unit_mm;
+  }
+  if (e.remove.empty() && last_axis_word >= 0) e.insert_after = last_axis_word;
+  return changed;
+}
+
+bool ProgramPost::polar_needs_change(const nc::Block& b, const nc::BlockEffect& fx,
+                                     const Vector3d& cmd) const {
+  // Where the block as written takes the controller: under G91 its
+  // increments from where it stands; under G90 the nominal end on the axes
+  // it names (X and Y through @ ^), where it stands on the others.
+  const nc::Motion& m = fx.motion;
+  const nc::State& s = interp_.state();
+  for (int a = 0; a < 3; ++a) {
+    const bool named = a < 2 || b.has('Z');
+    const double as_written = !s.absolute ? emitted_mm_[a] + (m.end_mm[a] - m.start_mm[a])
+                              : named     ? m.end_mm[a]
+                                          : emitted_mm_[a];
+    if (std::abs(cmd[a] - as_written) / s.unit_mm >= half_unit(decimals())) return true;
+  }
+  return false;
+}
+
+void ProgramPost::first_piece_minimal(std::string_view text, const nc::Block& b,
+                                      const nc::BlockEffect& fx, const BlockStyle& style,
+                                      const std::vector<Piece>& pieces) {
+  nc::BlockEdit& e = edit_;
+  e.remove.clear();
+  e.renumber.clear();
+  e.insert.clear();
+  e.insert_after = -1;
+  Vector3d reached_mm;
+  // A line of axis words only, all three of which change, is the piece's
+  // three words (what plain_line() writes for such a line, to the byte).
+  bool all_axes = true;
+  for (int a = 0; a < 3; ++a)
+    all_axes = all_axes && block_needs_word(b, style, fx.g53, a, pieces[0].command_mm);
+  if (all_axes) {
+    std::size_t axis_words = 0;
+    for (int a = 0; a < 3; ++a) axis_words += style.axis_index[a] >= 0 ? 1 : 0;
+    all_axes = axis_words == b.words.size();
+  }
+  if (all_axes) {
+    for (int a = 0; a < 3; ++a)
+      if (style.axis_index[a] >= 0) e.remove.push_back(style.axis_index[a]);
+    std::sort(e.remove.begin(), e.remove.end());
+    previous_words_.clear();
+    append_axis_words(pieces[0].command_mm, fx.g53, style.lower, style.spaces, previous_words_);
+    e.insert.assign(previous_words_.view());
+    nc::apply_edit(b, e, edited_);
+    emit(edited_);
+    ++report_.lines_changed;
+    set_emitted(pieces[0].command_mm, fx.g53);
+  } else if (!minimal_axis_words(b, style, fx.g53, pieces[0].command_mm, e, reached_mm)) {
+    if (pieces.size() == 1) {
+      write_unchanged(text, b, fx);
+      return;
+    }
+    emit(text);
+    emitted_mm_ = reached_mm;
+    emitted_exact_ = true;
+  } else {
+    nc::apply_edit(b, e, edited_);
+    emit(edited_);
+    ++report_.lines_changed;
+    emitted_mm_ = reached_mm;
+    emitted_exact_ = true;
+  }
+  previous_words_.clear();
+  append_axis_words(pieces[0].command_mm, fx.g53, style.lower, style.spaces, previous_words_);
+  const bool g53 = fx.g53;
+  emit_following_pieces(pieces, g53, style.lower, style.spaces, interp_.state().absolute,
+                        [&](size_t k, CharBuffer& w) {
+                          w.clear();
+                          append_axis_words(pieces[k].command_mm, g53, style.lower, style.spaces,
+                                            w);
+                        });
+  emitted_known_ = true;
 }
 
 void ProgramPost::offsets_line(std::string_view text, const nc::Block& b,
@@ -230,22 +347,29 @@ void ProgramPost::feed_line(std::string_view text, const nc::Block& b, const nc:
   const nc::Motion& m = fx.motion;
   const bool lower = style.lower, spaces = style.spaces;
   const Vector3d start_cmd = emitted_mm_;
-  if (m.kind == nc::MotionKind::kArc && options_.keep_arcs && keep_arc(b, m, c, lower, spaces))
+  if (m.kind == nc::MotionKind::kArc && options_.keep_arcs && keep_arc(text, b, fx, c, style))
     return;
+  if (m.kind == nc::MotionKind::kArc) {
+    ++report_.arcs_linearized;
+    output_left_arc_mode_ = true;
+  }
   const std::vector<Piece>& pieces = segment(c, m, start_cmd);
   const bool arc = m.kind == nc::MotionKind::kArc;
-  // A straight move whose end needs no change stays as written.
-  const bool polar = b.has('@') || b.has('^');  // always rewritten as X Y (see the rapids)
-  if (!arc && pieces.size() == 1 && !polar) {
-    bool needed = false;
-    for (int a = 0; a < 3; ++a)
-      needed = needed || block_needs_word(b, style, fx.g53, a, pieces[0].command_mm);
-    if (!needed) {
+  const bool polar = b.has('@') || b.has('^');  // rewritten as X Y when changed (see the rapids)
+  const nc::State& s = interp_.state();
+  const bool g93 = s.feed_mode == nc::kG93InverseTime;
+  if (!arc && !g93) {
+    // A straight move: its block is the first piece, with the fewest
+    // changed words; a block that needs none stays as written.
+    if (!polar) {
+      first_piece_minimal(text, b, fx, style, pieces);
+      return;
+    }
+    if (pieces.size() == 1 && !polar_needs_change(b, fx, pieces[0].command_mm)) {
       write_unchanged(text, b, fx);
       return;
     }
   }
-  const nc::State& s = interp_.state();
   auto g93_share = [&](double s0, double s1, double step_mm) {
     // Inverse time: the piece takes its share of the block's time. A
     // take-up step at a reversal covers no nominal path: it takes the time
@@ -257,7 +381,6 @@ void ProgramPost::feed_line(std::string_view text, const nc::Block& b, const nc:
     }
     return std::max(1e-12, share);
   };
-  const bool g93 = s.feed_mode == nc::kG93InverseTime;
   std::array<int, 12> remove;
   const std::size_t removed = feed_block_removals(b, style, arc, g93, remove);
   const bool g53 = fx.g53;
@@ -286,7 +409,7 @@ void ProgramPost::feed_line(std::string_view text, const nc::Block& b, const nc:
   char* out = out_buffer_.room(text.size() + insert.size() + 1 + 2);
   end_line(nc::apply_edit_to(b, remove.data(), removed, insert, spaces, out));
   ++report_.lines_changed;
-  emitted_mm_ = reached(pieces[0].command_mm, g53);
+  set_emitted(pieces[0].command_mm, g53);
   emit_following_pieces(pieces, g53, lower, spaces, !g93 && s.absolute,
                         [&](size_t k, CharBuffer& w) {
                           words_for(pieces[k].command_mm, pieces[k - 1].s_end, pieces[k].s_end, w);

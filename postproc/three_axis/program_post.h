@@ -33,69 +33,12 @@
 #include "gcode/program_reader.h"
 #include "postproc/three_axis/char_buffer.h"
 #include "postproc/three_axis/corrector.h"
+#include "postproc/three_axis/post_pieces.h"
 #include "postproc/three_axis/post_program.h"
 
 namespace volmap::post {
 
 using Eigen::Vector3d;
-
-// The direction each axis approaches `to` from `from`; an axis that does not
-// move keeps the direction it last moved in (it stands where its last move
-// left it, lost motion taken up that way).
-inline ApproachDirections directions_of(const Vector3d& from, const Vector3d& to,
-                                        const ApproachDirections& last) {
-  ApproachDirections d = last;
-  for (int a = 0; a < 3; ++a) {
-    const double delta = to[a] - from[a];
-    if (delta > 0) d[static_cast<size_t>(a)] = 1;
-    if (delta < 0) d[static_cast<size_t>(a)] = -1;
-  }
-  return d;
-}
-
-// An axis the nominal path does not move may still be commanded to creep
-// (the correction varies along the path). A creep against the direction the
-// axis last moved in is eaten by lost motion unless the command takes it up:
-// such an axis gets the direction of its commanded motion, so the command
-// for it includes the take-up step (and the piece containing the step is
-// split until the step stands alone). Returns whether d changed.
-inline bool settle_directions(const Vector3d& c0, const Vector3d& c1, const Vector3d& n0,
-                              const Vector3d& n1, ApproachDirections& d) {
-  bool changed = false;
-  for (int a = 0; a < 3; ++a) {
-    if (n1[a] != n0[a]) continue;  // the nominal motion sets the direction
-    const double creep = c1[a] - c0[a];
-    const std::int8_t want = creep > 0 ? 1 : (creep < 0 ? -1 : d[static_cast<size_t>(a)]);
-    if (want != d[static_cast<size_t>(a)]) {
-      d[static_cast<size_t>(a)] = want;
-      changed = true;
-    }
-  }
-  return changed;
-}
-
-// One commanded point of the output and the nominal path parameter it ends.
-struct Piece {
-  Vector3d command_mm;
-  double s_end;
-};
-
-/// How a block writes its words: the indices of its X, Y and Z words (-1:
-/// none), as nc::block_uses_lowercase (the case of the first letter, '@' and
-/// '^' have none) and nc::block_uses_spaces (a gap between two words; a lone
-/// word: spaces).
-struct BlockStyle {
-  int axis_index[3] = {-1, -1, -1};
-  bool lower = false;
-  bool spaces = false;
-};
-BlockStyle block_style(const nc::Block& b);
-/// The index of the block's word with letter L, or -1.
-inline int word_index(const nc::Block& b, char L) {
-  for (size_t k = 0; k < b.words.size(); ++k)
-    if (b.words[k].letter == L) return static_cast<int>(k);
-  return -1;
-}
 
 class ProgramPost {
  public:
@@ -243,6 +186,23 @@ class ProgramPost {
                            g53);
   }
 
+  /// The block's X Y Z words for commanded point cmd with the fewest
+  /// changes: a word is renumbered in place, or added after the block's
+  /// last axis word, only where the controller would otherwise stand more
+  /// than half an output unit off cmd (block_needs_word); every other word
+  /// keeps its text. Adds to e; returns whether any word changed; sets
+  /// *reached_mm to where the controller then stands.
+  bool minimal_axis_words(const nc::Block& b, const BlockStyle& style, bool g53,
+                          const Vector3d& cmd, nc::BlockEdit& e, Vector3d& reached_mm) const;
+  /// Whether a polar block (@ ^), as written, leaves the controller more
+  /// than half an output unit off cmd on any axis.
+  bool polar_needs_change(const nc::Block& b, const nc::BlockEffect& fx, const Vector3d& cmd) const;
+  /// A straight feed move in G94/G95 without polar words: the block as its
+  /// first piece with the fewest changed words (minimal_axis_words), the
+  /// other pieces after it; the block as written when it is one piece and
+  /// needs no change.
+  void first_piece_minimal(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                           const BlockStyle& style, const std::vector<Piece>& pieces);
   const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m,
                                     const Vector3d& start_cmd);
   /// The number of initial pieces of an arc: the chord error below tol / 4.
@@ -252,33 +212,47 @@ class ProgramPost {
   /// share their start).
   double start_deviation(const Corrector& c, const Vector3d& c0, const Vector3d& n0p,
                          const ApproachDirections& d);
-  /// PostOptions::keep_arcs: writes the arc block `b` (motion m) as the
-  /// corrected arc when that arc keeps the tolerance, and returns true;
-  /// false (nothing written, nothing changed) when it does not or cannot.
-  bool keep_arc(const nc::Block& b, const nc::Motion& m, const Corrector& c, bool lower,
-                bool spaces);
-  /// A kept arc's lines, in order: arcs and take-up steps (G1), their words.
+  /// PostOptions::keep_arcs: writes the arc block `b` (its effect fx) as
+  /// the corrected arc, cut only where the field needs it, when that keeps
+  /// the tolerance, and returns true; false (nothing written, nothing
+  /// changed) when it does not or cannot.
+  bool keep_arc(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                const Corrector& c, const BlockStyle& style);
+  /// A kept arc's lines, in order: arcs and take-up steps (G1), their
+  /// words, the commanded end, and an arc's centre words (program values
+  /// of the plane's axes).
   struct KeptLine {
     bool arc;
     std::string words;
+    Vector3d end_mm;
+    std::array<std::pair<bool, double>, 3> centre;
   };
   struct ArcPlan;
-  /// The arc's pieces between quadrant points for keep_arc (docs/post.md
-  /// "Arcs kept as arcs"); false when the arc cannot be kept.
+  /// The arc's pieces for keep_arc (docs/post.md "Arcs kept as arcs");
+  /// false when the arc cannot be kept.
   bool kept_arc_lines(const nc::Motion& m, const Corrector& c, bool lower, bool spaces,
                       std::vector<KeptLine>& lines);
-  /// Piece k of the plan (cuts[k] to cuts[k + 1]): its lines added when it
-  /// keeps the tolerance, else false.
-  bool kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const Corrector& c, std::size_t k,
-                      std::vector<KeptLine>& lines);
+  /// The piece of m from path parameter s0 to s1: its lines added when it
+  /// keeps the tolerance, else false (nothing added).
+  bool kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const Corrector& c, double s0,
+                      double s1, std::vector<KeptLine>& lines);
   /// A kept piece's lines: the take-up step to c0 when `step` (and not
   /// below the output's resolution), then the arc `cmd`.
   void add_kept_arc_piece_lines(const ArcPlan& plan, bool step, const Vector3d& c0,
                                 const nc::Motion& cmd, const ApproachDirections& d,
                                 std::vector<KeptLine>& lines);
+  /// A kept arc of one line: the block with the fewest changed words
+  /// (an R form becomes I J K when anything changes), or as written when
+  /// none needs a change. False (nothing written) when the block relies
+  /// on a modal G2/G3 that the output has left.
+  bool write_kept_arc_minimal(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                              const BlockStyle& style, const KeptLine& arc);
   /// The kept arc's lines out, the first in the block's place.
   void write_kept_arc(const nc::Block& b, const nc::Motion& m, bool lower, bool spaces,
                       const std::vector<KeptLine>& lines);
+  /// The output's modal motion is G1 where the program's is an arc (an arc
+  /// linearised): a following arc block without G2/G3 must state it.
+  bool output_left_arc_mode_ = false;
   /// The line when it is plain axis words (nc::lex_plain_axis_words) of a
   /// G1 move in G90 and G94/G95, the controller's position known, the tool
   /// the last line's: what line() does with it, without a Block, a
@@ -312,7 +286,7 @@ class ProgramPost {
       previous_words_.assign(words_.view());
       emit_move(1, lower, spaces, words_.view());
       ++report_.lines_added;
-      emitted_mm_ = reached(pieces[k].command_mm, g53);
+      set_emitted(pieces[k].command_mm, g53);
     }
   }
   static double half_unit(int dec) {
@@ -321,8 +295,8 @@ class ProgramPost {
     return dec >= 0 && dec <= 9 ? kHalfUnit[dec] : 0.5 * std::pow(10.0, -dec);
   }
   nc::Motion plain_motion_;  ///< plain_line()'s motion (only its kind and ends change)
-  void cycle_holes(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
-                   bool spaces, int dec);
+  void cycle_holes(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                   const Corrector& c, bool lower, bool spaces, int dec);
   void expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, const Corrector& c, bool lower,
                     bool spaces, int dec);
   /// The block's line without its cycle words, written unless blank.
@@ -457,6 +431,19 @@ class ProgramPost {
   nc::BlockEffect fx_;  ///< the line's effect (storage reused line after line)
   PostReport report_;
   Vector3d emitted_mm_ = Vector3d::Zero();  ///< last commanded position written
+  /// emitted_mm_ is the number the controller read (else the exact command
+  /// whose rounding it read, G90: within half an output unit).
+  bool emitted_exact_ = true;
+  /// Where the controller stands on axis a as it read it (G90, program
+  /// units): emitted_mm_, or the rounding written of it.
+  double start_as_read(int a) const {
+    const double v = program_value(a, emitted_mm_[a], false);
+    return emitted_exact_ ? v : written(v, decimals());
+  }
+  void set_emitted(const Vector3d& cmd, bool g53) {
+    emitted_mm_ = reached(cmd, g53);
+    emitted_exact_ = !interp_.state().absolute;
+  }
   bool emitted_known_ = false;
   ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
   int current_line_ = 0;
@@ -465,7 +452,7 @@ class ProgramPost {
   CharBuffer out_buffer_;
   bool hold_begun_ = false;  ///< the first flattened line came
   bool holding_ = false;     ///< every flattened line so far came out as it went in
-  nc::Block block_;  ///< the line being read (storage reused line after line)
+  nc::Block block_;          ///< the line being read (storage reused line after line)
   struct Pending {
     double s0, s1;
     Vector3d c0;
@@ -475,6 +462,8 @@ class ProgramPost {
   std::vector<Piece> pieces_;                   ///< segment()'s result (storage reused)
   std::vector<Pending> stack_;                  ///< segment()'s work list (storage reused)
   CharBuffer words_, previous_words_, insert_;  ///< scratch of the writer (storage reused)
+  nc::BlockEdit edit_;                          ///< scratch of the minimal edits (storage reused)
+  std::string edited_;                          ///< the edited line (storage reused)
   /// The last point corrected: command solves command + e(command, dir) =
   /// nominal (to solve_accuracy_mm()).
   struct LastCorrected {

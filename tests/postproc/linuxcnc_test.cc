@@ -35,13 +35,19 @@
 namespace volmap {
 namespace {
 
-// Arcs kept as arcs: rs274 reads as many arcs as volmap wrote into out.
+// Arcs kept as arcs: rs274 reads as many arcs as volmap's interpreter
+// reads in out (the blocks that state G2/G3 and those that rely on it).
 void expect_rs274_reads_the_written_arcs(const std::string& out, const Canon& after) {
   int written = 0, read = 0;
   std::istringstream lines(test::file_bytes(out));
-  for (std::string l; std::getline(lines, l);)
-    for (const nc::Word& w : nc::lex_block(l, 1, out).words)
-      written += w.letter == 'G' && (w.code10 == 20 || w.code10 == 30) ? 1 : 0;
+  nc::ProgramSetup setup;
+  nc::Interpreter interp(setup, out);
+  nc::BlockEffect fx;
+  int number = 0;
+  for (std::string l; std::getline(lines, l);) {
+    interp.execute(nc::lex_block(l, ++number, out), fx);
+    written += fx.has_motion && fx.motion.kind == nc::MotionKind::kArc ? 1 : 0;
+  }
   for (const nc::Motion& mo : after.feeds) read += mo.kind == nc::MotionKind::kArc ? 1 : 0;
   EXPECT_GT(written, 5);
   EXPECT_EQ(read, written) << "rs274's arcs are the ones volmap wrote";
@@ -52,6 +58,7 @@ struct Case {
   const char* extra_args;
   const char* machine;  // sample name (machine and errors)
   double wo[3];         // work offset, mm
+  bool arcs = false;    // count the arcs rs274 reads against ours
 };
 
 TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
@@ -63,8 +70,8 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
   // that never commands Z, on the 1000 x 600 mm gantry sample; rs274 starts
   // at program Z 0, and so does the post (--initial-position).
   const Case cases[] = {
-      {"tort.ngc", "", "hsu-3axis", {250, 200, 100}},
-      {"arcspiral.ngc", "", "hsu-3axis", {250, 200, 100}},
+      {"tort.ngc", "--linearize-arcs", "hsu-3axis", {250, 200, 100}},
+      {"arcspiral.ngc", "--linearize-arcs", "hsu-3axis", {250, 200, 100}},
       {"3dtest.ngc", "", "hsu-3axis", {250, 200, 100}},
       {"cds.ngc", "--tool-table", "hsu-3axis", {250, 200, 100}},
       {"hole-circle.ngc", "", "hsu-3axis", {250, 200, 100}},
@@ -74,10 +81,11 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
       // the initial G99) in one program each.
       {"tests/data/linuxcnc/polar.ngc", "", "hsu-3axis", {250, 200, 100}},
       {"tests/data/linuxcnc/cycles.ngc", "", "hsu-3axis", {250, 200, 100}},
-      // Arcs kept as arcs: rs274 reads them, its arcs are ours.
-      {"tests/data/linuxcnc/arcs.ngc", "--keep-arcs", "hsu-3axis", {150, 100, 200}},
-      {"arcspiral.ngc", "--keep-arcs", "hsu-3axis", {250, 200, 100}},
-      {"tort.ngc", "--keep-arcs", "hsu-3axis", {250, 200, 100}}};
+      // Arcs kept as arcs (the default): rs274 reads them, its arcs are
+      // ours.
+      {"tests/data/linuxcnc/arcs.ngc", "", "hsu-3axis", {150, 100, 200}, true},
+      {"arcspiral.ngc", "", "hsu-3axis", {250, 200, 100}, true},
+      {"tort.ngc", "", "hsu-3axis", {250, 200, 100}, true}};
   const fs::path dir = test::fresh_dir("linuxcnc");
   for (const Case& k : cases) {
     SCOPED_TRACE(k.program);
@@ -104,7 +112,7 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
     const Canon before = canonical(in, uses_tools ? tbl : "");
     const Canon after = canonical(out, uses_tools ? tbl : "");
     ASSERT_TRUE(before.ok && after.ok) << after.errors;
-    if (args == "--keep-arcs") expect_rs274_reads_the_written_arcs(out, after);
+    if (k.arcs) expect_rs274_reads_the_written_arcs(out, after);
     EXPECT_TRUE(after.errors.empty()) << after.errors;
     ASSERT_FALSE(before.feeds.empty());
     // Nominal path in machine coordinates.
