@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 
 #include "cli/commands.h"
@@ -19,9 +20,41 @@
 #include "postproc/five_axis/five_axis_post.h"
 #include "postproc/three_axis/corrector.h"
 #include "postproc/three_axis/post_program.h"
+#include "postproc/three_axis/post_summary.h"
 
 namespace volmap::cli {
 namespace {
+
+// --json: what the post did as one document (docs/post.md "What the post
+// did"), the summary's numbers.
+nlohmann::ordered_json summary_json(const post::PostSummaryInfo& info, const post::PostReport& r) {
+  nlohmann::ordered_json flattened = nullptr;
+  if (r.read.flattened_from > 0)
+    flattened = {{"from_line", r.read.flattened_from},
+                 {"source_lines", r.read.flat_source_lines},
+                 {"blocks", r.read.flat_blocks},
+                 {"written_as_read", r.flattened_written_as_read}};
+  nlohmann::ordered_json warnings = nlohmann::ordered_json::array();
+  for (const post::PostReport::CycleWarning& w : r.cycle_warnings)
+    warnings.push_back({{"file", w.file.empty() ? info.program : w.file},
+                        {"line", w.line},
+                        {"deviation_um", w.deviation_mm * 1e3}});
+  return {
+      {"program", info.program},
+      {"output", info.output},
+      {"tolerance_um", info.tolerance_um},
+      {"lines_in", r.lines_in},
+      {"lines_out", r.lines_out},
+      {"lines_changed", r.lines_changed},
+      {"lines_added", r.lines_added},
+      {"arcs", {{"kept", r.arcs_kept}, {"cut", r.arcs_split}, {"linearized", r.arcs_linearized}}},
+      {"points_corrected", r.points_corrected},
+      {"max_correction_um", r.max_correction_mm * 1e3},
+      {"max_deviation_um", r.max_deviation_mm * 1e3},
+      {"flattened", flattened},
+      {"cycle_warning_count", r.cycle_warning_count},
+      {"cycle_warnings", warnings}};
+}
 
 // The five-axis path (postproc/five_axis/five_axis_post.h).
 template <typename Opts>
@@ -67,6 +100,32 @@ int run_five_axis(const Opts& o, const Machine& m) {
   return 0;
 }
 
+// The options of what the three-axis post writes: cycles, arcs, the
+// summary as JSON and as a page.
+template <typename Opts>
+void add_three_axis_output_options(CLI::App& app, Opts& opts) {
+  CLI::App* sub = &app;
+  Opts* o = &opts;
+  sub->add_flag("--expand-cycles", o->expand_cycles,
+                "Write canned cycles G73 G81 G82 G83 G85 G89 out as their moves (LinuxCNC's), so "
+                "the feed into the hole keeps the tolerance too (three axes)");
+  auto* linearize = sub->add_flag(
+      "--linearize-arcs", o->linearize_arcs,
+      "Write every G2/G3 arc as straight G1 pieces within the tolerance (default: arcs stay arcs, "
+      "corrected end point and centre, cut only where the error field or an axis's lost motion "
+      "needs it; three axes)");
+  sub->add_flag("--keep-arcs", o->keep_arcs,
+                "Arcs stay arcs: the default, the flag is kept for scripts that give it")
+      ->excludes(linearize);
+  sub->add_flag("--json", o->json,
+                "Write what the post did (lines in and out, changed, added, arcs kept, largest "
+                "correction and predicted deviation) to stdout as one JSON document (three axes)");
+  sub->add_option("--report", o->report,
+                  "Write what the post did as a self-contained HTML page: the summary, canned "
+                  "cycles whose feed leaves the tolerance, the changed lines as read and as "
+                  "written (three axes)");
+}
+
 Runner register_post(CLI::App& app) {
   struct Opts {
     std::string machine, errors, errors_format = "auto", table, in, out;
@@ -78,6 +137,8 @@ Runner register_post(CLI::App& app) {
     bool expand_cycles = false;
     bool keep_arcs = false;
     bool linearize_arcs = false;
+    bool json = false;
+    std::string report;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand("post",
@@ -105,17 +166,7 @@ Runner register_post(CLI::App& app) {
   o->five.add_to(*sub, /*post=*/true);
   sub->add_flag("--clamp", o->clamp,
                 "Hold the end value of an error table outside it (default: refuse)");
-  sub->add_flag("--expand-cycles", o->expand_cycles,
-                "Write canned cycles G73 G81 G82 G83 G85 G89 out as their moves (LinuxCNC's), so "
-                "the feed into the hole keeps the tolerance too (three axes)");
-  auto* linearize = sub->add_flag(
-      "--linearize-arcs", o->linearize_arcs,
-      "Write every G2/G3 arc as straight G1 pieces within the tolerance (default: arcs stay arcs, "
-      "corrected end point and centre, cut only where the error field or an axis's lost motion "
-      "needs it; three axes)");
-  sub->add_flag("--keep-arcs", o->keep_arcs,
-                "Arcs stay arcs: the default, the flag is kept for scripts that give it")
-      ->excludes(linearize);
+  add_three_axis_output_options(*sub, *o);
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
   sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
   sub->footer(
@@ -131,9 +182,14 @@ Runner register_post(CLI::App& app) {
       if (o->expand_cycles) throw UsageError("--expand-cycles is for three-axis programs");
       if (o->keep_arcs || o->linearize_arcs)
         throw UsageError("--keep-arcs and --linearize-arcs are for three-axis programs");
+      if (o->json || !o->report.empty())
+        throw UsageError("--json and --report are for three-axis programs");
       return run_five_axis(*o, o->five.place_part(m));
     }
     if (o->errors.empty() && o->table.empty()) throw UsageError("post needs --errors or --table");
+    if (o->json && o->out == "-")
+      throw UsageError(
+          "--json writes to standard output, where -o - puts the program: give -o a file");
     std::optional<maps::VolumetricTable> table;
     ErrorSet e;
     if (!o->table.empty()) {
@@ -154,6 +210,7 @@ Runner register_post(CLI::App& app) {
     opt.expand_cycles = o->expand_cycles;
     opt.keep_arcs = !o->linearize_arcs;
     opt.subroutine_path = o->placement.subroutine_dirs(o->in);
+    if (!o->report.empty()) opt.max_recorded_changes = 2000;
     std::ifstream file_in;
     std::istream* in = &std::cin;
     std::string in_name = "<stdin>";
@@ -169,14 +226,21 @@ Runner register_post(CLI::App& app) {
     // "-": spooled to a temporary file and copied out when complete
     // (core/common/atomic_file.h): constant memory, and nothing on failure.
     AtomicOutput out(o->out, inputs);
+    // --report: opened before the work (an output onto an input is refused
+    // before anything runs), committed after it.
+    std::unique_ptr<AtomicOutput> report;
+    if (!o->report.empty()) report = std::make_unique<AtomicOutput>(o->report, inputs);
     const post::PostReport r =
         table ? post::post_program(*in, in_name, out.stream(), m, *table, setup, opt)
               : post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
+    const post::PostSummaryInfo info{in_name, o->out, m.name, table ? o->table : o->errors,
+                                     o->tolerance_um};
+    if (report) report->stream() << post::post_report_html(info, r);
     out.commit();
+    if (report) report->commit();
     print_read_notes(in_name, r.read, r.flattened_written_as_read);
-    if (isatty(2))
-      std::cerr << fmt::format("{} lines, {} changed, {} added, max correction {:.2f} um\n",
-                               r.lines, r.lines_changed, r.lines_added, r.max_correction_mm * 1e3);
+    std::cerr << post::post_summary_text(info, r);
+    if (o->json) std::cout << summary_json(info, r).dump(2) << '\n';
     return 0;
   };
 }

@@ -8,6 +8,7 @@
 #include "core/common/units.h"
 #include "gcode/block_check.h"
 #include "gcode/g_codes.h"
+#include "gcode/nc_path.h"
 
 namespace volmap::nc {
 namespace {
@@ -221,18 +222,13 @@ void BlockCheck::arc(Motion& mo, const Eigen::Vector3d& target, const std::array
     }
     const double r_start = (s2 - c2).norm(), r_end = (e2 - c2).norm();
     // LinuxCNC's rule (interp_arc.cc arc_data_ijk, in program units):
-    // a radius below RADIUS_TOLERANCE is a zero-radius arc; the two
-    // radii may differ by CENTER_ARC_RADIUS_TOLERANCE (0.02 sqrt 2 mm,
-    // 0.002 sqrt 2 inch, its default), or by more if that is at most
-    // 0.1 % (SPIRAL_RELATIVE_TOLERANCE) of the larger and at most 100
-    // times the tolerance.
+    // a radius below RADIUS_TOLERANCE is a zero-radius arc; the radii as
+    // linuxcnc_accepts_radii.
     const bool inch = s_.unit_mm > 1.0;
     const double r1 = r_start / s_.unit_mm, r2 = r_end / s_.unit_mm;
     const double zero_radius = inch ? 0.00005 : 0.00005 * 25.4;
-    const double spiral_abs = (inch ? 0.002 : 0.02) * std::sqrt(2.0);
     if (r1 < zero_radius || r2 < zero_radius) fail(i0 ? i0 : i1, "arc of zero radius");
-    const double abs_err = std::abs(r1 - r2), rel_err = abs_err / std::max(r1, r2);
-    if (abs_err > spiral_abs * 100.0 || (rel_err > 0.001 && abs_err > spiral_abs))
+    if (!linuxcnc_accepts_radii(r1, r2, inch))
       fail(i0 ? i0 : i1,
            fmt::format("radius to end of arc ({:.4f} mm) differs from radius to start "
                        "({:.4f} mm) by more than LinuxCNC allows; fix the centre or the end point",

@@ -49,6 +49,13 @@ double path_length_mm(const Motion& m) {
   return std::hypot(g.radius * g.sweep, m.end_mm[g.normal] - m.start_mm[g.normal]);
 }
 
+bool linuxcnc_accepts_radii(double r_start, double r_end, bool inch, double margin) {
+  const double spiral_abs = (inch ? 0.002 : 0.02) * std::sqrt(2.0);
+  const double abs_err = std::abs(r_start - r_end) + margin;
+  const double rel_err = abs_err / std::max(r_start, r_end);
+  return !(abs_err > spiral_abs * 100.0 || (rel_err > 0.001 && abs_err > spiral_abs));
+}
+
 double distance_to_path(const Motion& m, const Eigen::Vector3d& p) {
   if (m.kind != MotionKind::kArc) {
     const Eigen::Vector3d d = m.end_mm - m.start_mm;

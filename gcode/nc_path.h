@@ -23,6 +23,14 @@ Eigen::Vector3d point_on(const Motion& m, double s);
 
 double path_length_mm(const Motion& m);
 
+/// LinuxCNC's rule for an arc's two radii (interp_arc.cc arc_data_ijk, in
+/// program units, `inch` or mm): they may differ by
+/// CENTER_ARC_RADIUS_TOLERANCE (0.02 sqrt 2 mm, 0.002 sqrt 2 inch, its
+/// default), or by more if that is at most 0.1 % (SPIRAL_RELATIVE_TOLERANCE)
+/// of the larger and at most 100 times the tolerance. `margin` (program
+/// units) is taken off the allowance.
+bool linuxcnc_accepts_radii(double r_start, double r_end, bool inch, double margin = 0.0);
+
 /// Distance (mm) from p to the nearest point of the motion's path.
 double distance_to_path(const Motion& m, const Eigen::Vector3d& p);
 

@@ -64,6 +64,11 @@ class ProgramReader {
   void set_max_executed_lines(long n) { max_executed_ = n; }
   const ReadReport& report() const { return report_; }
   const std::string& file() const { return file_; }
+  /// Lines of the program file read so far (a last line without '\n'
+  /// counted): all of them once next() returned false.
+  long input_lines() const {
+    return newlines_read_ + (last_read_ != '\n' && last_read_ != 0 ? 1 : 0);
+  }
   /// The program's text from the line where flattening began to its end,
   /// as read (empty if it did not begin): what a post that changed none
   /// of the flattened lines writes back instead of them.
@@ -93,6 +98,9 @@ class ProgramReader {
   std::size_t trailer_next_ = 0;
   ReadReport report_;
   std::string original_rest_;
+  long newlines_read_ = 0;
+  char last_read_ = 0;  ///< the last byte read from the stream (0: none)
+  void count_read(const char* data, std::size_t size);
   long max_executed_ = flatten::kMaxExecutedLines;
 };
 

@@ -184,13 +184,19 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   const nc::ArcGeometry& g = plan.g;
   const nc::State& s = interp_.state();
   nc::Motion piece = m;
-  piece.extra_turns = 0;
+  // The whole block as one piece keeps its extra turns (P), a part of it
+  // has none.
+  const bool whole = s0 == 0.0 && s1 == 1.0;
+  if (!whole) piece.extra_turns = 0;
   piece.start_mm = s0 == 0.0 ? m.start_mm : nc::point_on(m, s0);
   piece.end_mm = nc::point_on(m, s1);
   const nc::ArcGeometry pg = nc::arc_geometry(piece);
   // (A piece that arc_geometry reads as another turn, or backwards: cut.)
   if (!(std::abs(pg.sweep - g.sweep * (s1 - s0)) < 1e-6)) return false;
-  const bool full_circle = std::abs(std::abs(pg.sweep) - 2 * M_PI) < 1e-9;
+  // Closed in its plane (a full circle, or full turns of a helix): the
+  // controller runs it only when the written end is the start in the plane.
+  const bool full_circle =
+      std::abs(std::remainder(std::abs(pg.sweep), 2 * M_PI)) < 1e-9 && std::abs(pg.sweep) > 1.0;
   // Its directions at its ends: the plane's axes from the tangent, the
   // normal axis from the helix, else as they were.
   const int n = g.normal;
@@ -241,7 +247,13 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   cmd.center_mm[g.a0] = m.center_mm[g.a0] + shift[g.a0];
   cmd.center_mm[g.a1] = m.center_mm[g.a1] + shift[g.a1];
   const nc::ArcGeometry gc = nc::arc_geometry(cmd);
-  if (!(std::abs(gc.sweep - pg.sweep) < 1e-3) || !(std::abs(gc.radius - gc.end_radius) < 0.01))
+  // The arc the controller reads (its numbers rounded: a unit off at most
+  // on each radius) within LinuxCNC's rule for its radii, and a spiral no
+  // more than 0.01 mm beyond the nominal arc's.
+  if (!(std::abs(gc.sweep - pg.sweep) < 1e-3) ||
+      !(std::abs(gc.end_radius - gc.radius) <= std::abs(pg.end_radius - pg.radius) + 0.01) ||
+      !nc::linuxcnc_accepts_radii(gc.radius / s.unit_mm, gc.end_radius / s.unit_mm, s.unit_mm > 1.0,
+                                  4 * half_unit(decimals())))
     return false;
   // The normal axis commanded the way d says (a creep against it would be
   // lost in the play of an axis with lost motion, unless that is within a
@@ -256,6 +268,7 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   // up (an axis not yet moved: the mean).
   const int samples = std::max(16, static_cast<int>(std::ceil(std::abs(pg.sweep) / plan.step_rad)));
   Vector3d h(d0[0], d0[1], d0[2]);
+  double worst = 0.0;
   Vector3d previous = c0;
   for (int j = 0; j <= samples; ++j) {
     const Vector3d x = nc::point_on(cmd, static_cast<double>(j) / samples);
@@ -266,8 +279,9 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
       h[a] = w < 1e-9 ? (travel > 0 ? 1.0 : -1.0) : std::clamp(h[a] + 2.0 * travel / w, -1.0, 1.0);
     }
     previous = x;
-    if (!(nc::distance_to_path(m, x + c.error_with_play(x, h)) <= 0.5 * options_.tolerance_mm))
-      return false;
+    const double deviation = nc::distance_to_path(m, x + c.error_with_play(x, h));
+    if (!(deviation <= 0.5 * options_.tolerance_mm)) return false;
+    worst = std::max(worst, deviation);
   }
   // An axis turning round inside the piece: its error's jump there within
   // a quarter of the tolerance (the cuts put the larger ones between pieces).
@@ -282,6 +296,7 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
     }
   }
   add_kept_arc_piece_lines(plan, step, c0, cmd, d1, lines);
+  report_.max_deviation_mm = std::max(report_.max_deviation_mm, worst);
   return true;
 }
 
@@ -397,7 +412,6 @@ bool ProgramPost::write_kept_arc_minimal(std::string_view text, const nc::Block&
   }
   if (r_form) {
     e.remove.push_back(word_index(b, 'R'));
-    if (const int p = word_index(b, 'P'); p >= 0) e.remove.push_back(p);
     if (!e.insert.empty() && style.spaces) e.insert += ' ';
     e.insert += centre_words;
   } else {
@@ -427,8 +441,9 @@ void ProgramPost::write_kept_arc(const nc::Block& b, const nc::Motion& m, bool l
     const char L = word.letter;
     const bool motion = L == 'G' && (word.code10 == nc::kG2ArcClockwise ||
                                      word.code10 == nc::kG3ArcCounterClockwise);
+    // (P stays with a block written as one arc: the turns are its own.)
     if (L == 'X' || L == 'Y' || L == 'Z' || L == 'I' || L == 'J' || L == 'K' || L == 'R' ||
-        L == 'P' || (motion && !lines[0].arc))
+        (L == 'P' && lines.size() > 1) || (motion && !lines[0].arc))
       edit.remove.push_back(static_cast<int>(k));
     stated = stated || motion;
   }

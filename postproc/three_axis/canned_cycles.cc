@@ -51,6 +51,7 @@ void ProgramPost::cycle_holes(std::string_view text, const nc::Block& b, const n
     ApproachDirections d;
     const Vector3d cmd = position_command(c, h.start_mm, h.end_mm, true, d);
     const Vector3d r_cmd = command(c, Vector3d(h.end_mm.x(), h.end_mm.y(), h.r_mm), d);
+    check_cycle_feed(c, h, cmd, r_cmd.z(), d);
     Hole& w = holes[k];
     double bottom;  // the Z the words take the tool down to
     if (s.absolute) {

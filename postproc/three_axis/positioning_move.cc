@@ -6,6 +6,8 @@
 #include <cmath>
 #include <string>
 
+#include "gcode/g_codes.h"
+#include "gcode/nc_path.h"
 #include "postproc/three_axis/program_post.h"
 
 namespace volmap::post {
@@ -81,6 +83,7 @@ double ProgramPost::cycle_r_plane(const nc::Block& b, const nc::Motion& m, const
   // (the correction differs from hole to hole).
   const Vector3d r_nominal(m.end_mm.x(), m.end_mm.y(), m.r_mm);
   const Vector3d r_cmd = command(c, r_nominal, d);
+  check_cycle_feed(c, m, cmd, r_cmd.z(), d);
   const double r_new = (r_cmd.z() - interp_.work_offset()[2]) / s.unit_mm;
   const double r_nom = (m.r_mm - interp_.work_offset()[2]) / s.unit_mm;
   if (e.changed || std::abs(r_new - r_nom) >= half_unit(dec)) {
@@ -104,6 +107,37 @@ double ProgramPost::cycle_r_plane(const nc::Block& b, const nc::Motion& m, const
   const double r_read_mm =
       e.changed ? written(r_new, dec) * s.unit_mm + interp_.work_offset()[2] : m.r_mm;
   return s.g98 ? std::max(ctrl_il_mm_, r_read_mm) : r_read_mm;
+}
+
+void ProgramPost::check_cycle_feed(const Corrector& c, const nc::Motion& hole,
+                                   const Vector3d& bottom_cmd, double r_cmd_mm,
+                                   const ApproachDirections& d) {
+  // The controller feeds straight down from the corrected R plane to the
+  // corrected bottom (and pecks back in along it; G85 G89 feed out along
+  // it too): the actual tip along that line against the hole's axis.
+  nc::Motion axis;
+  axis.kind = nc::MotionKind::kLinear;
+  axis.start_mm = Vector3d(hole.end_mm.x(), hole.end_mm.y(), hole.r_mm);
+  axis.end_mm = hole.end_mm;
+  const Vector3d top_cmd(bottom_cmd.x(), bottom_cmd.y(), r_cmd_mm);
+  const int code = interp_.state().motion;
+  const bool feeds_out = code == nc::kG85Bore || code == nc::kG89BoreDwell;
+  double worst = 0.0;
+  for (const std::int8_t z_dir : {std::int8_t{-1}, std::int8_t{1}}) {
+    if (z_dir > 0 && !feeds_out) break;
+    ApproachDirections dz = d;
+    dz[2] = z_dir;
+    constexpr int kSamples = 16;
+    for (int j = 0; j <= kSamples; ++j) {
+      const Vector3d x = top_cmd + (bottom_cmd - top_cmd) * (static_cast<double>(j) / kSamples);
+      worst = std::max(worst, nc::distance_to_path(axis, x + c.error_at(x, dz)));
+    }
+  }
+  if (worst <= options_.tolerance_mm) return;
+  if (report_.cycle_warnings.size() < PostReport::kMaxCycleWarnings)
+    report_.cycle_warnings.push_back(
+        {current_line_, worst, line_file_ == &file_ ? std::string() : *line_file_});
+  ++report_.cycle_warning_count;
 }
 
 void ProgramPost::positioning_line(std::string_view text, const nc::Block& b,

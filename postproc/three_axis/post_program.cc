@@ -1,11 +1,14 @@
 // post_program: the program read line by line through ProgramPost
-// (program_post.h), the output flushed also on failure.
+// (program_post.h), the output flushed also on failure; a flattened part
+// held back while it changes nothing, and the changed lines recorded.
 #include "postproc/three_axis/post_program.h"
 
 #include <cmath>
+#include <cstring>
 #include <istream>
 #include <ostream>
 #include <stdexcept>
+#include <string_view>
 
 #include "core/common/input_error.h"
 #include "maps/tables/volumetric_table.h"
@@ -13,6 +16,28 @@
 #include "postproc/three_axis/program_post.h"
 
 namespace volmap::post {
+
+// The flattened part is held back while each of its lines comes out as it
+// went in (finish() may then write the program as read instead).
+void ProgramPost::check_held_line(const nc::ProgramLine& l, std::size_t before) {
+  const std::size_t n = out_buffer_.size() - before;
+  const std::size_t want = l.text.size() + (l.newline ? 1 : 0);
+  if (n == want && std::memcmp(out_buffer_.data() + before, l.text.data(), l.text.size()) == 0 &&
+      (!l.newline || out_buffer_.data()[before + n - 1] == '\n'))
+    return;
+  holding_ = false;
+}
+
+// --report's changed lines: the line as read and what was written for it.
+void ProgramPost::record_change(const nc::ProgramLine& l, std::size_t before) {
+  std::string_view out(out_buffer_.data() + before, out_buffer_.size() - before);
+  const std::string_view in = l.text;
+  if (out.size() == in.size() + (l.newline ? 1 : 0) && out.substr(0, in.size()) == in) return;
+  if (!out.empty() && out.back() == '\n') out.remove_suffix(1);
+  report_.changes.push_back({l.file && l.file != &file_ ? *l.file : std::string(), l.line,
+                             std::string(nc::flatten::without_cr(in)), std::string(out)});
+}
+
 namespace {
 PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& out,
                     const Machine& machine, const ErrorSet& errors,
@@ -41,6 +66,7 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
   post.finish(reader.original_rest());
   PostReport report = post.report();
   report.read = reader.report();
+  report.lines_in = static_cast<std::uint64_t>(reader.input_lines());
   return report;
 }
 

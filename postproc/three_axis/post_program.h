@@ -58,6 +58,9 @@ struct PostOptions {
   /// "Speed"); the output is the same byte for byte. false: every line the
   /// general way (the tests compare both).
   bool shortcuts = true;
+  /// The first this many lines that come out other than they went in are
+  /// kept in PostReport::changes (for --report); 0: none.
+  std::size_t max_recorded_changes = 0;
   /// Where `O<name> call` finds NAME.ngc (LinuxCNC's SUBROUTINE_PATH).
   std::vector<std::string> subroutine_path;
 };
@@ -71,6 +74,34 @@ struct PostReport {
   std::uint64_t arcs_kept = 0;        ///< arcs written as one arc
   std::uint64_t arcs_split = 0;       ///< arcs written as several arcs
   std::uint64_t arcs_linearized = 0;  ///< arcs written as straight pieces
+  /// The largest deviation of the actual path from the nominal one between
+  /// the points of a feed move, as the post predicts it (its bound, or its
+  /// largest sample where the bound was not enough; mm).
+  double max_deviation_mm = 0.0;
+  /// Lines of the program file, and of the output (leader and trailer
+  /// included in both).
+  std::uint64_t lines_in = 0, lines_out = 0;
+  /// Canned-cycle blocks kept as cycles whose feed into the hole, which the
+  /// controller computes, leaves the tolerance: line, predicted deviation
+  /// (mm), file (empty: the program). The first kMaxCycleWarnings only;
+  /// cycle_warning_count counts all.
+  struct CycleWarning {
+    int line;
+    double deviation_mm;
+    std::string file;
+  };
+  static constexpr std::size_t kMaxCycleWarnings = 1000;
+  std::vector<CycleWarning> cycle_warnings;
+  std::uint64_t cycle_warning_count = 0;
+  /// Lines that came out other than they went in (the first
+  /// PostOptions::max_recorded_changes): file (empty: the program), line,
+  /// the line as read, what was written for it (its lines, '\n' between).
+  struct Change {
+    std::string file;
+    int line;
+    std::string in, out;
+  };
+  std::vector<Change> changes;
   /// The program was flattened, but no line of the flattened part needed a
   /// change: that part was written back as it was read, not flat.
   bool flattened_written_as_read = false;

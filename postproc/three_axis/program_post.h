@@ -64,6 +64,8 @@ class ProgramPost {
   /// verbatim text such as tape leader).
   void line(const nc::ProgramLine& l) {
     if (l.flattened && !hold_begun_) begin_hold();
+    const bool record = report_.changes.size() < options_.max_recorded_changes;
+    keep_line_ = record;
     const std::size_t before = out_buffer_.size();
     if (l.verbatim) {
       ++report_.lines;
@@ -76,6 +78,11 @@ class ProgramPost {
       line(l.text, l.line, l.newline, l.plain ? &l.words : nullptr);
     }
     if (holding_) check_held_line(l, before);
+    if (record) {
+      keep_line_ = false;
+      record_change(l, before);
+      if (out_buffer_.size() >= kFlushAt && !holding_) flush();
+    }
   }
   /// `plain`: the line's axis words when the reader read it as a line of
   /// axis words only (nc::lex_plain_axis_words), else nullptr.
@@ -89,15 +96,16 @@ class ProgramPost {
     // definitions only, changed nothing either.)
     if (holding_ || (!hold_begun_ && !original_rest.empty())) {
       out_buffer_.clear();
-      out_.write(original_rest.data(), static_cast<std::streamsize>(original_rest.size()));
+      write_out(original_rest.data(), original_rest.size());
       report_.flattened_written_as_read = true;
       holding_ = false;
     }
     flush();
+    if (last_byte_ != '\n' && last_byte_ != 0) ++report_.lines_out;  // a last line without '\n'
   }
   /// Writes out what emit() gathered (also on failure: what was done).
   void flush() {
-    out_.write(out_buffer_.data(), static_cast<std::streamsize>(out_buffer_.size()));
+    write_out(out_buffer_.data(), out_buffer_.size());
     out_buffer_.clear();
   }
   // Output gathered in 64 KB pieces.
@@ -114,36 +122,9 @@ class ProgramPost {
     if (options_.decimals >= 0) return options_.decimals;
     return interp_.state().unit_mm > 1.0 ? 5 : 4;
   }
-  Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d) {
-    // Warm start from the correction of the last point corrected, moved on
-    // along the line through the last two (the fixed point is the same, to
-    // solve_accuracy_mm(); it takes a third to a half of the evaluations).
-    Vector3d cmd;
-    if (last_.corrector == &c) {
-      Vector3d guess = last_.command - last_.nominal;
-      if (before_last_.corrector == &c && c.same_error(before_last_.dir, last_.dir) &&
-          c.same_error(last_.dir, d)) {
-        const Vector3d a = last_.nominal - before_last_.nominal;
-        const double a2 = a.squaredNorm();
-        if (a2 > 0) {
-          const double t = std::clamp((nominal - last_.nominal).dot(a) / a2, 0.0, 2.0);
-          guess += t * (guess - (before_last_.command - before_last_.nominal));
-        }
-      }
-      cmd = c.command_for(nominal, d, guess, solve_accuracy_mm());
-    } else {
-      cmd = c.command_for(nominal, d);
-    }
-    before_last_ = last_;
-    last_ = {&c, nominal, cmd, d};
-    const double corr = (cmd - nominal).norm();
-    if (!std::isfinite(corr))
-      throw InputError(*line_file_, current_line_,
-                       "the correction is not finite here; check the errors file");
-    report_.max_correction_mm = std::max(report_.max_correction_mm, corr);
-    ++report_.points_corrected;
-    return cmd;
-  }
+  /// The command whose actual tip is `nominal` (directions d), warm-started
+  /// from the last points corrected (segmenter.cc).
+  Vector3d command(const Corrector& c, const Vector3d& nominal, const ApproachDirections& d);
 
   // --- The line's paths (one file each, see the top) ---
   /// The line as written: the controller then stands where its words say,
@@ -152,6 +133,12 @@ class ProgramPost {
   /// G92 / G10 L20 with axis words: their values moved by where the
   /// controller stands off the nominal point.
   void offsets_line(std::string_view text, const nc::Block& b, const Vector3d& nominal_mm);
+  /// A canned cycle kept as a cycle: the feed into the hole (from the R
+  /// plane commanded at r_cmd_mm to bottom_cmd), which the controller
+  /// computes, checked against the hole's axis; beyond the tolerance it
+  /// goes into the report's cycle_warnings (--expand-cycles writes it out).
+  void check_cycle_feed(const Corrector& c, const nc::Motion& hole, const Vector3d& bottom_cmd,
+                        double r_cmd_mm, const ApproachDirections& d);
   /// A rapid, or a canned-cycle block of one hole in G90 (positioning_move.cc).
   void positioning_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
                         const Corrector& c, const BlockStyle& style);
@@ -203,6 +190,11 @@ class ProgramPost {
   /// needs no change.
   void first_piece_minimal(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
                            const BlockStyle& style, const std::vector<Piece>& pieces);
+  /// The largest deviation of the actual tip from the nominal path at the
+  /// samples of a piece (from path parameter s0 commanded at c0 to s1 at
+  /// c1, directions d); it stops at the first beyond the tolerance.
+  double sampled_deviation(const Corrector& c, const nc::Motion& m, double s0, double s1,
+                           const Vector3d& c0, const Vector3d& c1, const ApproachDirections& d);
   const std::vector<Piece>& segment(const Corrector& c, const nc::Motion& m,
                                     const Vector3d& start_cmd);
   /// The number of initial pieces of an arc: the chord error below tol / 4.
@@ -390,8 +382,12 @@ class ProgramPost {
   void end_line(char* p) {
     std::memcpy(p, line_ending_, 2);  // room for both was made; only the ending's length counts
     out_buffer_.commit(p + line_ending_size_);
-    if (out_buffer_.size() >= kFlushAt && !holding_) flush();
+    if (out_buffer_.size() >= kFlushAt && !holding_ && !keep_line_) flush();
   }
+  bool keep_line_ = false;  ///< the line's output stays in the buffer until it is recorded
+  /// PostOptions::max_recorded_changes: line l, when its output (from byte
+  /// `before` of the buffer on) is not the line as read, into the report.
+  void record_change(const nc::ProgramLine& l, std::size_t before);
   /// The flattened part is held back (not flushed) until a line of it
   /// comes out other than it went in: until then, finish() may write the
   /// program as it was read instead.
@@ -402,14 +398,7 @@ class ProgramPost {
   }
   /// Ends the hold when line l did not come out as it went in (from byte
   /// `before` of the buffer on).
-  void check_held_line(const nc::ProgramLine& l, std::size_t before) {
-    const std::size_t n = out_buffer_.size() - before;
-    const std::size_t want = l.text.size() + (l.newline ? 1 : 0);
-    if (n == want && std::memcmp(out_buffer_.data() + before, l.text.data(), l.text.size()) == 0 &&
-        (!l.newline || out_buffer_.data()[before + n - 1] == '\n'))
-      return;
-    holding_ = false;
-  }
+  void check_held_line(const nc::ProgramLine& l, std::size_t before);
   void emit(std::string_view text) {
     char* p = out_buffer_.room(text.size() + 2);
     std::memcpy(p, text.data(), text.size());
@@ -450,6 +439,13 @@ class ProgramPost {
   char line_ending_[2] = {};  ///< the line's ending as read: "", "\n", "\r" or "\r\n"
   std::size_t line_ending_size_ = 0;
   CharBuffer out_buffer_;
+  char last_byte_ = 0;  ///< the last byte written out (0: none yet)
+  void write_out(const char* data, std::size_t size) {
+    if (size == 0) return;
+    out_.write(data, static_cast<std::streamsize>(size));
+    report_.lines_out += static_cast<std::uint64_t>(std::count(data, data + size, '\n'));
+    last_byte_ = data[size - 1];
+  }
   bool hold_begun_ = false;  ///< the first flattened line came
   bool holding_ = false;     ///< every flattened line so far came out as it went in
   nc::Block block_;          ///< the line being read (storage reused line after line)

@@ -1,5 +1,6 @@
 // ProgramPost::segment: a move cut into pieces until the actual path stays
-// within the tolerance of the nominal one (docs/post.md).
+// within the tolerance of the nominal one (docs/post.md), and command():
+// the corrected point, warm-started from the last ones.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -41,6 +42,52 @@ double ProgramPost::start_deviation(const Corrector& c, const Vector3d& c0, cons
   return dev0;
 }
 
+Vector3d ProgramPost::command(const Corrector& c, const Vector3d& nominal,
+                              const ApproachDirections& d) {
+  // Warm start from the correction of the last point corrected, moved on
+  // along the line through the last two (the fixed point is the same, to
+  // solve_accuracy_mm(); it takes a third to a half of the evaluations).
+  Vector3d cmd;
+  if (last_.corrector == &c) {
+    Vector3d guess = last_.command - last_.nominal;
+    if (before_last_.corrector == &c && c.same_error(before_last_.dir, last_.dir) &&
+        c.same_error(last_.dir, d)) {
+      const Vector3d a = last_.nominal - before_last_.nominal;
+      const double a2 = a.squaredNorm();
+      if (a2 > 0) {
+        const double t = std::clamp((nominal - last_.nominal).dot(a) / a2, 0.0, 2.0);
+        guess += t * (guess - (before_last_.command - before_last_.nominal));
+      }
+    }
+    cmd = c.command_for(nominal, d, guess, solve_accuracy_mm());
+  } else {
+    cmd = c.command_for(nominal, d);
+  }
+  before_last_ = last_;
+  last_ = {&c, nominal, cmd, d};
+  const double corr = (cmd - nominal).norm();
+  if (!std::isfinite(corr))
+    throw InputError(*line_file_, current_line_,
+                     "the correction is not finite here; check the errors file");
+  report_.max_correction_mm = std::max(report_.max_correction_mm, corr);
+  ++report_.points_corrected;
+  return cmd;
+}
+
+double ProgramPost::sampled_deviation(const Corrector& c, const nc::Motion& m, double s0, double s1,
+                                      const Vector3d& c0, const Vector3d& c1,
+                                      const ApproachDirections& d) {
+  // At 1/4, 1/2, 3/4 of the piece; the first beyond the tolerance ends it.
+  double worst = 0.0;
+  for (double t : {0.25, 0.5, 0.75}) {
+    const Vector3d x = c0 + t * (c1 - c0);
+    const Vector3d nominal = nc::point_on(m, s0 + t * (s1 - s0));
+    worst = std::max(worst, (x + c.error_at(x, d) - nominal).norm());
+    if (worst > options_.tolerance_mm) break;
+  }
+  return worst;
+}
+
 const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                                const Vector3d& start_cmd) {
   const double tol = options_.tolerance_mm;
@@ -76,6 +123,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
       }
       bool ok = true;
       bool sample = true;
+      double predicted = 0.0;  // the piece's deviation: its bound, or its largest sample
       if (m.kind == nc::MotionKind::kLinear) {
         // The deviation of the actual path from the nominal line,
         // dev(t) = x(t) + e(x(t)) - n(t) with x and n linear in t, is the
@@ -93,7 +141,10 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
                                        : kResidual + (start.nominal - n0p).norm();
         const double chord = c.chord_deviation_bound(p.c0, c1);
         const double bound = std::max(dev0, kResidual) + chord;
-        if (bound <= tol) sample = false;
+        if (bound <= tol) {
+          sample = false;
+          predicted = bound;
+        }
         // The other way round: at t = 1/4 the deviation is at least
         // 3/4 |dev(0)| - 1/4 |dev(1)| - 3/32 K |c1 - c0|^2. When that exceeds
         // the tolerance (a lost-motion step at the start), the sample at 1/4
@@ -122,17 +173,12 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
           }
         }
       }
-      for (double t : {0.25, 0.5, 0.75}) {
-        if (!sample) break;
-        const Vector3d x = p.c0 + t * (c1 - p.c0);
-        const Vector3d actual = x + c.error_at(x, d);
-        const Vector3d nominal = nc::point_on(m, p.s0 + t * (p.s1 - p.s0));
-        if ((actual - nominal).norm() > tol) {
-          ok = false;
-          break;
-        }
+      if (sample) {
+        predicted = sampled_deviation(c, m, p.s0, p.s1, p.c0, c1, d);
+        ok = predicted <= tol;
       }
       if (ok || p.s1 - p.s0 < 1e-9) {
+        report_.max_deviation_mm = std::max(report_.max_deviation_mm, predicted);
         done.push_back({c1, p.s1});
         if (done.size() > kMaxPieces)
           throw InputError(
