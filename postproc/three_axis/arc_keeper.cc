@@ -54,6 +54,24 @@ double reversal_jump_mm(const Corrector& c, const Vector3d& p, int a, ApproachDi
   return (plus - c.error_at(p, d)).norm();
 }
 
+// Where a piece of the arc (path parameters s0 to s1) that does not keep
+// the tolerance is cut: at the quadrant point nearest its middle (where an
+// axis turns round: each part moves every axis one way) when one lies in
+// its middle four fifths, else at its middle.
+double split_point(const nc::ArcGeometry& g, double s0, double s1) {
+  const double mid = 0.5 * (s0 + s1), quarter = M_PI / 2;
+  const double a_mid = g.start_angle + g.sweep * mid;
+  double best = mid, best_gap = 0.4 * (s1 - s0);
+  for (const double q : {std::floor(a_mid / quarter), std::ceil(a_mid / quarter)}) {
+    const double s = (q * quarter - g.start_angle) / g.sweep;
+    if (std::abs(s - mid) < best_gap) {
+      best = s;
+      best_gap = std::abs(s - mid);
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 // An arc stays one block where the field allows. It is cut only where it
@@ -69,7 +87,8 @@ double reversal_jump_mm(const Corrector& c, const Vector3d& p, int a, ApproachDi
 // corrections at the piece's ends (for an error field affine over the
 // piece, the corrected points of the nominal arc lie on a slightly
 // distorted circle about it). A piece is kept only when the actual tip
-// stays within half the tolerance of the nominal path at samples as dense
+// stays within the tolerance (less the rounding of the written numbers, at
+// least half of it left) of the nominal path at samples as dense
 // as the field's bounds require, each sample with the directions the axes
 // move in there (an axis turning round inside a piece switches its error
 // there: within a quarter of the tolerance, by the cuts). Otherwise the
@@ -169,7 +188,7 @@ bool ProgramPost::kept_arc_lines(const nc::Motion& m, const Corrector& c, bool l
       ++pieces;
       continue;
     }
-    const double mid = 0.5 * (s0 + s1);
+    const double mid = split_point(g, s0, s1);
     if (pieces + static_cast<int>(todo.size()) + 2 > kMaxKeptPieces ||
         !((mid - s0) * std::abs(g.sweep) > 2 * plan.hair))
       return false;
@@ -269,6 +288,12 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   const int samples = std::max(16, static_cast<int>(std::ceil(std::abs(pg.sweep) / plan.step_rad)));
   Vector3d h(d0[0], d0[1], d0[2]);
   double worst = 0.0;
+  // The tolerance less what the written numbers may add: the end and the
+  // centre each rounded by half an output unit per axis (at least half the
+  // tolerance is left for the arc itself).
+  const double limit = std::max(0.5 * options_.tolerance_mm,
+                                options_.tolerance_mm -
+                                    2 * std::sqrt(3.0) * half_unit(decimals()) * s.unit_mm);
   Vector3d previous = c0;
   for (int j = 0; j <= samples; ++j) {
     const Vector3d x = nc::point_on(cmd, static_cast<double>(j) / samples);
@@ -280,7 +305,7 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
     }
     previous = x;
     const double deviation = nc::distance_to_path(m, x + c.error_with_play(x, h));
-    if (!(deviation <= 0.5 * options_.tolerance_mm)) return false;
+    if (!(deviation <= limit)) return false;
     worst = std::max(worst, deviation);
   }
   // An axis turning round inside the piece: its error's jump there within
