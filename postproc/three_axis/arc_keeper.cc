@@ -281,33 +281,8 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
       move != 0 && c.bidirectional(n) && (move > 0 ? 1 : -1) != d0[static_cast<size_t>(n)] &&
       reversal_jump_mm(c, c0, n, d0) > 0.25 * options_.tolerance_mm)
     return false;
-  // Samples of the actual tip, lost motion as play (verify's backlash
-  // operator: an axis's state goes from one side of its play to the other
-  // as its command travels back the play's width), from the side d0 took
-  // up (an axis not yet moved: the mean).
-  const int samples = std::max(16, static_cast<int>(std::ceil(std::abs(pg.sweep) / plan.step_rad)));
-  Vector3d h(d0[0], d0[1], d0[2]);
   double worst = 0.0;
-  // The tolerance less what the written numbers may add: the end and the
-  // centre each rounded by half an output unit per axis (at least half the
-  // tolerance is left for the arc itself).
-  const double limit = std::max(0.5 * options_.tolerance_mm,
-                                options_.tolerance_mm -
-                                    2 * std::sqrt(3.0) * half_unit(decimals()) * s.unit_mm);
-  Vector3d previous = c0;
-  for (int j = 0; j <= samples; ++j) {
-    const Vector3d x = nc::point_on(cmd, static_cast<double>(j) / samples);
-    for (int a = 0; a < 3; ++a) {
-      const double travel = x[a] - previous[a];
-      if (travel == 0.0 || !c.bidirectional(a)) continue;
-      const double w = c.play_width_mm(a, x);
-      h[a] = w < 1e-9 ? (travel > 0 ? 1.0 : -1.0) : std::clamp(h[a] + 2.0 * travel / w, -1.0, 1.0);
-    }
-    previous = x;
-    const double deviation = nc::distance_to_path(m, x + c.error_with_play(x, h));
-    if (!(deviation <= limit)) return false;
-    worst = std::max(worst, deviation);
-  }
+  if (!kept_arc_samples(m, cmd, c, d0, std::abs(pg.sweep) / plan.step_rad, worst)) return false;
   // An axis turning round inside the piece: its error's jump there within
   // a quarter of the tolerance (the cuts put the larger ones between pieces).
   {
@@ -322,6 +297,39 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   }
   add_kept_arc_piece_lines(plan, step, c0, cmd, d1, lines);
   report_.max_deviation_mm = std::max(report_.max_deviation_mm, worst);
+  return true;
+}
+
+// Samples of the actual tip along the commanded arc cmd (from c0 = its
+// start), lost motion as play (verify's backlash operator: an axis's state
+// goes from one side of its play to the other as its command travels back
+// the play's width), from the side d0 took up (an axis not yet moved: the
+// mean); at least `min_samples`. True, and the largest deviation from the
+// nominal arc m in *worst, when every sample keeps the tolerance less what
+// the written numbers may add (the end and the centre each rounded by half
+// an output unit per axis; at least half the tolerance is left).
+bool ProgramPost::kept_arc_samples(const nc::Motion& m, const nc::Motion& cmd, const Corrector& c,
+                                   const ApproachDirections& d0, double min_samples,
+                                   double& worst) {
+  const int samples = std::max(16, static_cast<int>(std::ceil(min_samples)));
+  Vector3d h(d0[0], d0[1], d0[2]);
+  const double limit = std::max(
+      0.5 * options_.tolerance_mm,
+      options_.tolerance_mm - 2 * std::sqrt(3.0) * half_unit(decimals()) * interp_.state().unit_mm);
+  Vector3d previous = cmd.start_mm;
+  for (int j = 0; j <= samples; ++j) {
+    const Vector3d x = nc::point_on(cmd, static_cast<double>(j) / samples);
+    for (int a = 0; a < 3; ++a) {
+      const double travel = x[a] - previous[a];
+      if (travel == 0.0 || !c.bidirectional(a)) continue;
+      const double w = c.play_width_mm(a, x);
+      h[a] = w < 1e-9 ? (travel > 0 ? 1.0 : -1.0) : std::clamp(h[a] + 2.0 * travel / w, -1.0, 1.0);
+    }
+    previous = x;
+    const double deviation = nc::distance_to_path(m, x + c.error_with_play(x, h));
+    if (!(deviation <= limit)) return false;
+    worst = std::max(worst, deviation);
+  }
   return true;
 }
 

@@ -228,6 +228,9 @@ class ProgramPost {
   /// keeps the tolerance, else false (nothing added).
   bool kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const Corrector& c, double s0,
                       double s1, std::vector<KeptLine>& lines);
+  /// The actual tip sampled along a kept piece (arc_keeper.cc).
+  bool kept_arc_samples(const nc::Motion& m, const nc::Motion& cmd, const Corrector& c,
+                        const ApproachDirections& d0, double min_samples, double& worst);
   /// A kept piece's lines: the take-up step to c0 when `step` (and not
   /// below the output's resolution), then the arc `cmd`.
   void add_kept_arc_piece_lines(const ArcPlan& plan, bool step, const Vector3d& c0,

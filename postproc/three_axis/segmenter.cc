@@ -178,7 +178,9 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         ok = predicted <= tol;
       }
       if (ok || p.s1 - p.s0 < 1e-9) {
-        report_.max_deviation_mm = std::max(report_.max_deviation_mm, predicted);
+        // (A piece that covers no path, a take-up step, leaves the tool
+        // standing while the play is taken up.)
+        if (ok) report_.max_deviation_mm = std::max(report_.max_deviation_mm, predicted);
         done.push_back({c1, p.s1});
         if (done.size() > kMaxPieces)
           throw InputError(
