@@ -103,15 +103,8 @@ void ProgramReader::fill() {
   if (end_ == buf_.size()) buf_.resize(2 * buf_.size());
   in_.read(buf_.data() + end_, static_cast<std::streamsize>(buf_.size() - end_));
   const auto got = static_cast<std::size_t>(in_.gcount());
-  count_read(buf_.data() + end_, got);
   end_ += got;
   if (got == 0) eof_ = true;
-}
-
-void ProgramReader::count_read(const char* data, std::size_t size) {
-  if (size == 0) return;
-  newlines_read_ += std::count(data, data + size, '\n');
-  last_read_ = data[size - 1];
 }
 
 bool ProgramReader::physical(std::string_view& text, bool& newline) {
@@ -183,10 +176,12 @@ void ProgramReader::start_flattening(std::string_view first, bool newline) {
     data.resize(at + (std::size_t{1} << 20));
     in_.read(data.data() + at, static_cast<std::streamsize>(std::size_t{1} << 20));
     data.resize(at + static_cast<std::size_t>(in_.gcount()));
-    count_read(data.data() + at, data.size() - at);
     if (in_.gcount() == 0) eof_ = true;
   }
   original_rest_ = data;
+  // Its lines beyond the first (counted by physical() already).
+  flattened_extra_lines_ = static_cast<long>(std::count(data.begin(), data.end(), '\n')) +
+                           (!data.empty() && data.back() != '\n' ? 1 : 0) - 1;
   // What follows a closing '%' is not run: set aside, handed out verbatim.
   if (opened_) {
     std::size_t b = first.size() + (newline ? 1 : 0);  // (the first line is not a '%' line)

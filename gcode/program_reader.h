@@ -66,9 +66,7 @@ class ProgramReader {
   const std::string& file() const { return file_; }
   /// Lines of the program file read so far (a last line without '\n'
   /// counted): all of them once next() returned false.
-  long input_lines() const {
-    return newlines_read_ + (last_read_ != '\n' && last_read_ != 0 ? 1 : 0);
-  }
+  long input_lines() const { return number_ + flattened_extra_lines_; }
   /// The program's text from the line where flattening began to its end,
   /// as read (empty if it did not begin): what a post that changed none
   /// of the flattened lines writes back instead of them.
@@ -98,9 +96,7 @@ class ProgramReader {
   std::size_t trailer_next_ = 0;
   ReadReport report_;
   std::string original_rest_;
-  long newlines_read_ = 0;
-  char last_read_ = 0;  ///< the last byte read from the stream (0: none)
-  void count_read(const char* data, std::size_t size);
+  long flattened_extra_lines_ = 0;  ///< lines read in for flattening beyond its first
   long max_executed_ = flatten::kMaxExecutedLines;
 };
 

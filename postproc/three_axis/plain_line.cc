@@ -26,11 +26,22 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
   ctrl_il_known_ = false;  // the run of cycle blocks has ended
   const Corrector& c = *last_corrector_;
   const std::vector<Piece>& pieces = segment(c, plain_motion_, emitted_mm_);
+  // axis_needs_word for the three axes, its constants taken once (G90, no
+  // G53: program value = (machine - origin) / unit, no division in mm).
   unsigned needed = 0;
-  for (int a = 0; a < 3; ++a)
-    if (axis_needs_word(a, pieces[0].command_mm,
-                        (words.given >> a & 1u) ? &words.value[a] : nullptr, false))
-      needed |= 1u << a;
+  {
+    const double half = half_unit(decimals()), unit = st.unit_mm;
+    const Vector3d& origin = interp_.work_offset();
+    const Vector3d& cmd = pieces[0].command_mm;
+    for (int a = 0; a < 3; ++a) {
+      const double v = unit == 1.0 ? cmd[a] - origin[a] : (cmd[a] - origin[a]) / unit;
+      const double old =
+          (words.given >> a & 1u)
+              ? words.value[a]
+              : (unit == 1.0 ? emitted_mm_[a] - origin[a] : (emitted_mm_[a] - origin[a]) / unit);
+      if (std::abs(v - old) >= half) needed |= 1u << a;
+    }
+  }
   if (needed == 0 && pieces.size() == 1) {
     // unchanged(): the line as written, the controller where its words say
     // (the move's end)

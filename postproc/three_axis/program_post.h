@@ -95,7 +95,11 @@ class ProgramPost {
     // (A flattened part that ran as no block, such as a file of subroutine
     // definitions only, changed nothing either.)
     if (holding_ || (!hold_begun_ && !original_rest.empty())) {
+      report_.lines_out -= static_cast<std::uint64_t>(
+          std::count(out_buffer_.data(), out_buffer_.data() + out_buffer_.size(), '\n'));
       out_buffer_.clear();
+      report_.lines_out +=
+          static_cast<std::uint64_t>(std::count(original_rest.begin(), original_rest.end(), '\n'));
       write_out(original_rest.data(), original_rest.size());
       report_.flattened_written_as_read = true;
       holding_ = false;
@@ -385,6 +389,8 @@ class ProgramPost {
   void end_line(char* p) {
     std::memcpy(p, line_ending_, 2);  // room for both was made; only the ending's length counts
     out_buffer_.commit(p + line_ending_size_);
+    // (Lines out: the '\n's written, a last line without one at finish().)
+    report_.lines_out += line_ending_size_ > 0 && line_ending_[line_ending_size_ - 1] == '\n';
     if (out_buffer_.size() >= kFlushAt && !holding_ && !keep_line_) flush();
   }
   bool keep_line_ = false;  ///< the line's output stays in the buffer until it is recorded
@@ -446,7 +452,6 @@ class ProgramPost {
   void write_out(const char* data, std::size_t size) {
     if (size == 0) return;
     out_.write(data, static_cast<std::streamsize>(size));
-    report_.lines_out += static_cast<std::uint64_t>(std::count(data, data + size, '\n'));
     last_byte_ = data[size - 1];
   }
   bool hold_begun_ = false;  ///< the first flattened line came
