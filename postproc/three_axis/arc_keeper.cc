@@ -33,27 +33,6 @@ int turning_axis(const nc::ArcGeometry& g, double q) {
   return static_cast<long long>(std::llround(q)) % 2 == 0 ? g.a0 : g.a1;
 }
 
-// The directions of the plane's axes where the arc `m` runs at parameter s
-// (the sign of its tangent; an axis at its turning point keeps `d`'s).
-ApproachDirections tangent_directions(const nc::Motion& m, const nc::ArcGeometry& g, double s,
-                                      ApproachDirections d) {
-  const double h = 1e-6;
-  const Vector3d t = nc::point_on(m, std::min(1.0, s + h)) - nc::point_on(m, std::max(0.0, s - h));
-  for (int a : {g.a0, g.a1})
-    if (t[a] != 0) d[static_cast<size_t>(a)] = t[a] > 0 ? 1 : -1;
-  return d;
-}
-
-// The error's jump when axis a turns round at p: the two directions' errors
-// apart (an axis without bidirectional data: none).
-double reversal_jump_mm(const Corrector& c, const Vector3d& p, int a, ApproachDirections d) {
-  if (!c.bidirectional(a)) return 0.0;
-  d[static_cast<size_t>(a)] = 1;
-  const Vector3d plus = c.error_at(p, d);
-  d[static_cast<size_t>(a)] = -1;
-  return (plus - c.error_at(p, d)).norm();
-}
-
 // Where a piece of the arc (path parameters s0 to s1) that does not keep
 // the tolerance is cut: at the quadrant point nearest its middle (where an
 // axis turns round: each part moves every axis one way) when one lies in
@@ -172,7 +151,7 @@ bool ProgramPost::kept_arc_lines(const nc::Motion& m, const Corrector& c, bool l
     if (s_cut >= 1.0 - margin) break;
     if (s_cut <= margin) continue;
     const int a = turning_axis(g, q);
-    if (reversal_jump_mm(c, nc::point_on(m, s_cut), a, last_dir_) > 0.25 * options_.tolerance_mm)
+    if (c.reversal_jump_mm(nc::point_on(m, s_cut), a, last_dir_) > 0.25 * options_.tolerance_mm)
       cuts.push_back(s_cut);
     if (cuts.size() > kMaxKeptPieces) return false;
   }
@@ -219,10 +198,10 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   // Its directions at its ends: the plane's axes from the tangent, the
   // normal axis from the helix, else as they were.
   const int n = g.normal;
-  ApproachDirections d0 = tangent_directions(piece, pg, 0.0, last_dir_);
+  ApproachDirections d0 = arc_tangent_directions(piece, pg, 0.0, last_dir_);
   if (m.end_mm[n] != m.start_mm[n])
     d0[static_cast<size_t>(n)] = m.end_mm[n] > m.start_mm[n] ? 1 : -1;
-  ApproachDirections d1 = tangent_directions(piece, pg, 1.0, d0);
+  ApproachDirections d1 = arc_tangent_directions(piece, pg, 1.0, d0);
   // An axis that turns round here takes up its play first.
   bool step = false;
   Vector3d c0, c1;
@@ -279,7 +258,7 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   // quarter of the tolerance).
   if (const double move = c1[n] - c0[n];
       move != 0 && c.bidirectional(n) && (move > 0 ? 1 : -1) != d0[static_cast<size_t>(n)] &&
-      reversal_jump_mm(c, c0, n, d0) > 0.25 * options_.tolerance_mm)
+      c.reversal_jump_mm(c0, n, d0) > 0.25 * options_.tolerance_mm)
     return false;
   double worst = 0.0;
   if (!kept_arc_samples(m, cmd, c, d0, std::abs(pg.sweep) / plan.step_rad, worst)) return false;
@@ -290,7 +269,7 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
                  hi = std::max(gc.start_angle, gc.start_angle + gc.sweep) - 2 * plan.hair;
     for (double q = std::ceil(lo / (M_PI / 2)); q * (M_PI / 2) <= hi; q += 1) {
       const double t = (q * (M_PI / 2) - gc.start_angle) / gc.sweep;
-      if (reversal_jump_mm(c, nc::point_on(cmd, t), turning_axis(gc, q), d0) >
+      if (c.reversal_jump_mm(nc::point_on(cmd, t), turning_axis(gc, q), d0) >
           0.25 * options_.tolerance_mm)
         return false;
     }
@@ -319,12 +298,7 @@ bool ProgramPost::kept_arc_samples(const nc::Motion& m, const nc::Motion& cmd, c
   Vector3d previous = cmd.start_mm;
   for (int j = 0; j <= samples; ++j) {
     const Vector3d x = nc::point_on(cmd, static_cast<double>(j) / samples);
-    for (int a = 0; a < 3; ++a) {
-      const double travel = x[a] - previous[a];
-      if (travel == 0.0 || !c.bidirectional(a)) continue;
-      const double w = c.play_width_mm(a, x);
-      h[a] = w < 1e-9 ? (travel > 0 ? 1.0 : -1.0) : std::clamp(h[a] + 2.0 * travel / w, -1.0, 1.0);
-    }
+    c.take_up_play(previous, x, h);
     previous = x;
     const double deviation = nc::distance_to_path(m, x + c.error_with_play(x, h));
     if (!(deviation <= limit)) return false;
@@ -390,11 +364,7 @@ bool ProgramPost::write_kept_arc_minimal(std::string_view text, const nc::Block&
                                             w.code10 == nc::kG3ArcCounterClockwise));
   if (!stated && output_left_arc_mode_) return false;
   const int dec = decimals();
-  nc::BlockEdit& e = edit_;
-  e.remove.clear();
-  e.renumber.clear();
-  e.insert.clear();
-  e.insert_after = -1;
+  nc::BlockEdit& e = fresh_edit();
   Vector3d reached_mm;
   bool changed = minimal_axis_words(b, style, false, arc.end_mm, e, reached_mm);
   // The centre words: renumbered where they would move the centre by half

@@ -286,6 +286,24 @@ Eigen::Vector3d Corrector::error_with_play(const Eigen::Vector3d& p,
   return e;
 }
 
+double Corrector::reversal_jump_mm(const Eigen::Vector3d& p, int a, ApproachDirections d) const {
+  if (!bidirectional(a)) return 0.0;
+  d[static_cast<size_t>(a)] = 1;
+  const Eigen::Vector3d plus = error_at(p, d);
+  d[static_cast<size_t>(a)] = -1;
+  return (plus - error_at(p, d)).norm();
+}
+
+void Corrector::take_up_play(const Eigen::Vector3d& from, const Eigen::Vector3d& to,
+                             Eigen::Vector3d& h) const {
+  for (int a = 0; a < 3; ++a) {
+    const double travel = to[a] - from[a];
+    if (travel == 0.0 || !bidirectional(a)) continue;
+    const double w = play_width_mm(a, to);
+    h[a] = w < 1e-9 ? (travel > 0 ? 1.0 : -1.0) : std::clamp(h[a] + 2.0 * travel / w, -1.0, 1.0);
+  }
+}
+
 double Corrector::play_width_mm(int a, const Eigen::Vector3d& p) const {
   if (!bidirectional_[static_cast<size_t>(a)]) return 0.0;
   if (table_) {  // the difference of the two layers' tip errors along the axis

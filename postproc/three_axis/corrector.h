@@ -57,6 +57,15 @@ class Corrector {
   /// error (mm); 0 for an axis without bidirectional data.
   double play_width_mm(int a, const Eigen::Vector3d& p_machine_mm) const;
   bool bidirectional(int a) const { return bidirectional_[static_cast<size_t>(a)]; }
+  /// The jump of the error at p when axis a turns round: the two
+  /// directions' errors apart (the other axes as d says; 0 without play).
+  double reversal_jump_mm(const Eigen::Vector3d& p_machine_mm, int a, ApproachDirections d) const;
+  /// The backlash operator (verify's, the kept arcs'): the commanded point
+  /// moves from `from` to `to`; each axis with play moves its state h
+  /// (error_with_play) across the play by twice its travel over the play's
+  /// width, clamped to [-1, 1] (an axis of no width: at once).
+  void take_up_play(const Eigen::Vector3d& from, const Eigen::Vector3d& to,
+                    Eigen::Vector3d& h) const;
   /// Whether the error is the same function under both direction sets (they
   /// differ only for axes without bidirectional data).
   bool same_error(const ApproachDirections& a, const ApproachDirections& b) const {

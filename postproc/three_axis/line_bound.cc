@@ -15,15 +15,6 @@
 namespace volmap::post {
 namespace {
 
-// The jump of the error at p when axis a turns round (0 without play).
-double jump_mm(const Corrector& c, const Vector3d& p, int a, ApproachDirections d) {
-  if (!c.bidirectional(a)) return 0.0;
-  d[static_cast<size_t>(a)] = 1;
-  const Vector3d plus = c.error_at(p, d);
-  d[static_cast<size_t>(a)] = -1;
-  return (plus - c.error_at(p, d)).norm();
-}
-
 // Does the chord between the corrected points at path parameters s and t
 // of the straight move m keep the tolerance (32 points along it)?
 bool chord_keeps(const Corrector& c, const nc::Motion& m, double s, double t,
@@ -57,26 +48,14 @@ std::uint64_t fewest_chords(const Corrector& c, const nc::Motion& m, const Appro
   return pieces;
 }
 
-// The directions of the plane's axes along arc m at parameter u (sign of
-// its tangent; an axis at its turning point keeps d's).
-ApproachDirections arc_directions(const nc::Motion& m, const nc::ArcGeometry& g, double u,
-                                  ApproachDirections d) {
-  const double h = 1e-6;
-  const Vector3d t = nc::point_on(m, std::min(1.0, u + h)) - nc::point_on(m, std::max(0.0, u - h));
-  for (int a : {g.a0, g.a1})
-    if (t[a] != 0) d[static_cast<size_t>(a)] = t[a] > 0 ? 1 : -1;
-  if (m.end_mm[g.normal] != m.start_mm[g.normal])
-    d[static_cast<size_t>(g.normal)] = m.end_mm[g.normal] > m.start_mm[g.normal] ? 1 : -1;
-  return d;
-}
-
 // Lines forced by axes that turn round with more play than the tolerance:
 // at the move's start (directions `from` before, `to` on it) at point p.
 std::uint64_t forced_turns(const Corrector& c, const Vector3d& p, const ApproachDirections& from,
                            const ApproachDirections& to, double tol) {
   for (int a = 0; a < 3; ++a)
     if (from[static_cast<size_t>(a)] != 0 && to[static_cast<size_t>(a)] != 0 &&
-        from[static_cast<size_t>(a)] != to[static_cast<size_t>(a)] && jump_mm(c, p, a, to) > tol)
+        from[static_cast<size_t>(a)] != to[static_cast<size_t>(a)] &&
+        c.reversal_jump_mm(p, a, to) > tol)
       return 1;
   return 0;
 }
@@ -112,7 +91,7 @@ LineBound fewest_lines(std::istream& in, const std::string& name, const Machine&
     if (c.zero()) continue;
     if (m.kind == nc::MotionKind::kArc) {
       const nc::ArcGeometry g = nc::arc_geometry(m);
-      ApproachDirections d = arc_directions(m, g, 0.0, last);
+      ApproachDirections d = arc_tangent_directions(m, g, 0.0, last);
       b.turn_lines += forced_turns(c, m.start_mm, last, d, tolerance_mm);
       // Inside: every quadrant point where an axis with play turns round.
       const double quarter = M_PI / 2, lo = std::min(g.start_angle, g.start_angle + g.sweep),
@@ -123,9 +102,9 @@ LineBound fewest_lines(std::istream& in, const std::string& name, const Machine&
         const int a = static_cast<long long>(std::llround(q)) % 2 == 0 ? g.a0 : g.a1;
         // The arc cut there, and the play taken up between the two arcs by
         // a move of its own: two lines more.
-        if (jump_mm(c, nc::point_on(m, u), a, d) > tolerance_mm) b.turn_lines += 2;
+        if (c.reversal_jump_mm(nc::point_on(m, u), a, d) > tolerance_mm) b.turn_lines += 2;
       }
-      last = arc_directions(m, g, 1.0, d);
+      last = arc_tangent_directions(m, g, 1.0, d);
     } else {
       ApproachDirections d = directions_of(m.start_mm, m.end_mm, last);
       if (m.kind == nc::MotionKind::kLinear) {

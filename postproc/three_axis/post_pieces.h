@@ -4,11 +4,13 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 
 #include "core/model/error_model.h"
 #include "gcode/nc_block.h"
+#include "gcode/nc_path.h"
 
 namespace volmap::post {
 
@@ -70,6 +72,20 @@ inline int word_index(const nc::Block& b, char L) {
   for (size_t k = 0; k < b.words.size(); ++k)
     if (b.words[k].letter == L) return static_cast<int>(k);
   return -1;
+}
+
+/// The directions of the plane's axes where the arc m (geometry g) runs at
+/// path parameter s: the sign of its tangent, an axis at its turning point
+/// keeping d's; the normal axis of a helix the way it climbs.
+inline ApproachDirections arc_tangent_directions(const nc::Motion& m, const nc::ArcGeometry& g,
+                                                 double s, ApproachDirections d) {
+  const double h = 1e-6;
+  const Vector3d t = nc::point_on(m, std::min(1.0, s + h)) - nc::point_on(m, std::max(0.0, s - h));
+  for (int a : {g.a0, g.a1})
+    if (t[a] != 0) d[static_cast<size_t>(a)] = t[a] > 0 ? 1 : -1;
+  if (m.end_mm[g.normal] != m.start_mm[g.normal])
+    d[static_cast<size_t>(g.normal)] = m.end_mm[g.normal] > m.start_mm[g.normal] ? 1 : -1;
+  return d;
 }
 
 }  // namespace volmap::post

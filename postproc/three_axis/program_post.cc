@@ -232,11 +232,7 @@ bool ProgramPost::polar_needs_change(const nc::Block& b, const nc::BlockEffect& 
 void ProgramPost::first_piece_minimal(std::string_view text, const nc::Block& b,
                                       const nc::BlockEffect& fx, const BlockStyle& style,
                                       const std::vector<Piece>& pieces) {
-  nc::BlockEdit& e = edit_;
-  e.remove.clear();
-  e.renumber.clear();
-  e.insert.clear();
-  e.insert_after = -1;
+  nc::BlockEdit& e = fresh_edit();
   Vector3d reached_mm;
   // A line of axis words only, all three of which change, is the piece's
   // three words (what plain_line() writes for such a line, to the byte).

@@ -467,7 +467,14 @@ class ProgramPost {
   std::vector<Pending> stack_;                  ///< segment()'s work list (storage reused)
   CharBuffer words_, previous_words_, insert_;  ///< scratch of the writer (storage reused)
   nc::BlockEdit edit_;                          ///< scratch of the minimal edits (storage reused)
-  std::string edited_;                          ///< the edited line (storage reused)
+  nc::BlockEdit& fresh_edit() {
+    edit_.remove.clear();
+    edit_.renumber.clear();
+    edit_.insert.clear();
+    edit_.insert_after = -1;
+    return edit_;
+  }
+  std::string edited_;  ///< the edited line (storage reused)
   /// The last point corrected: command solves command + e(command, dir) =
   /// nominal (to solve_accuracy_mm()).
   struct LastCorrected {

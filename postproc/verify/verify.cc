@@ -144,12 +144,7 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
     if (fm.measured) path_mm += len;
     for (int k = 0; k <= n; ++k) {
       const Vector3d x = nc::point_on(m, static_cast<double>(k) / n);
-      for (int a = 0; a < 3; ++a) {
-        const double step = x[a] - previous[a];
-        if (step == 0.0 || !c.bidirectional(a)) continue;
-        const double w = c.play_width_mm(a, x);
-        h[a] = w < 1e-9 ? (step > 0 ? 1.0 : -1.0) : std::clamp(h[a] + 2.0 * step / w, -1.0, 1.0);
-      }
+      c.take_up_play(previous, x, h);
       previous = x;
       if (!fm.measured) continue;
       const Vector3d actual = x + c.error_with_play(x, h);

@@ -16,25 +16,20 @@
 #include "gcode/nc_interpreter.h"
 #include "postproc/three_axis/post_program.h"
 #include "postproc/verify/verify.h"
+#include "tests/support/cli_in_source.h"
+#include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
 namespace {
 
-Machine hsu() { return load_machine_json(test::source_path("samples/machines/hsu-3axis.json")); }
-ErrorSet hsu_errors() { return load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv")); }
+Machine hsu() { return test::sample_machine("hsu-3axis"); }
+ErrorSet hsu_errors() { return test::sample_errors("hsu-3axis"); }
 
 nc::ProgramSetup offset_setup(double x, double y, double z) {
   nc::ProgramSetup s;
   s.work_offset_mm[0] = Eigen::Vector3d(x, y, z);
   return s;
-}
-
-std::string read_file(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
 }
 
 const char* kNcFiles = "/usr/share/linuxcnc/ncfiles/";
@@ -46,7 +41,9 @@ const char* kNcFiles = "/usr/share/linuxcnc/ncfiles/";
 // corrected ends and centres; the real machine runs the whole within the
 // tolerance. Where an arc cannot be kept the output is the linearised one
 // (keep_arc puts back what it tried).
-std::string arc_program() { return read_file(test::source_path("tests/data/linuxcnc/arcs.ngc")); }
+std::string arc_program() {
+  return test::file_bytes(test::source_path("tests/data/linuxcnc/arcs.ngc"));
+}
 
 int arc_blocks(const std::string& program) {
   int n = 0;
@@ -89,7 +86,7 @@ TEST(PostArcs, KeptWhereTheFieldAllowsWithinTheTolerance) {
   for (const char* name : {"arcspiral.ngc", "tort.ngc"}) {
     const std::string path = std::string(kNcFiles) + name;
     if (!std::filesystem::exists(path)) GTEST_SKIP() << "LinuxCNC programs not installed";
-    const std::string program = read_file(path);
+    const std::string program = test::file_bytes(path);
     const nc::ProgramSetup s2 = offset_setup(250, 200, 100);
     post::PostOptions o;
     o.keep_arcs = true;

@@ -17,20 +17,15 @@
 #include "postproc/three_axis/line_bound.h"
 #include "postproc/three_axis/post_program.h"
 #include "postproc/verify/verify.h"
+#include "tests/support/cli_in_source.h"
+#include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
 namespace {
 
-Machine hsu() { return load_machine_json(test::source_path("samples/machines/hsu-3axis.json")); }
-ErrorSet hsu_errors() { return load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv")); }
-
-std::string bytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+Machine hsu() { return test::sample_machine("hsu-3axis"); }
+ErrorSet hsu_errors() { return test::sample_errors("hsu-3axis"); }
 
 TEST(PostLines, FewerThanQuadrantCutsAndWithinOneAndAHalfOfTheBound) {
   struct Case {
@@ -42,7 +37,7 @@ TEST(PostLines, FewerThanQuadrantCutsAndWithinOneAndAHalfOfTheBound) {
   for (const Case& k : {Case{"tort.ngc", 749}, Case{"arcspiral.ngc", 1106}, Case{"3dtest.ngc", 88},
                         Case{"cds.ngc", 857}}) {
     SCOPED_TRACE(k.name);
-    const std::string program = bytes(dir + k.name);
+    const std::string program = test::file_bytes(dir + k.name);
     nc::ProgramSetup s;
     s.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
     nc::read_tool_table("/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/simpockets.tbl",
