@@ -75,11 +75,15 @@ inline int word_index(const nc::Block& b, char L) {
 }
 
 /// The directions of the plane's axes where the arc m (geometry g) runs at
-/// path parameter s: the sign of its tangent, an axis at its turning point
-/// keeping d's; the normal axis of a helix the way it climbs.
+/// path parameter s: the way each moves over a milliradian of the arc from
+/// there (at an end, into the arc), an axis that does not move keeping d's;
+/// the normal axis of a helix the way it climbs. (Not the tangent at the
+/// point itself: at a turning point the tangent of an axis is zero, and the
+/// sign of what is left is that of the arc's spiral, its radii's rounding,
+/// not of where the axis goes.)
 inline ApproachDirections arc_tangent_directions(const nc::Motion& m, const nc::ArcGeometry& g,
                                                  double s, ApproachDirections d) {
-  const double h = 1e-6;
+  const double h = std::min(0.25, 1e-3 / std::max(std::abs(g.sweep), 1e-9));
   const Vector3d t = nc::point_on(m, std::min(1.0, s + h)) - nc::point_on(m, std::max(0.0, s - h));
   for (int a : {g.a0, g.a1})
     if (t[a] != 0) d[static_cast<size_t>(a)] = t[a] > 0 ? 1 : -1;
