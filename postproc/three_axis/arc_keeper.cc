@@ -26,13 +26,6 @@ namespace {
 // At most this many arcs for one block; beyond, the block is linearised.
 constexpr int kMaxKeptPieces = 256;
 
-// The axis of the plane that turns round at angle q * pi/2 of an arc in
-// the plane (a0, a1): at 0 and pi the a0 coordinate (r cos) is extreme, at
-// pi/2 and 3pi/2 the a1 coordinate (r sin).
-int turning_axis(const nc::ArcGeometry& g, double q) {
-  return static_cast<long long>(std::llround(q)) % 2 == 0 ? g.a0 : g.a1;
-}
-
 // Where a piece of the arc (path parameters s0 to s1) that does not keep
 // the tolerance is cut: at the quadrant point nearest its middle (where an
 // axis turns round: each part moves every axis one way) when one lies in
@@ -199,8 +192,6 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   // normal axis from the helix, else as they were.
   const int n = g.normal;
   ApproachDirections d0 = arc_tangent_directions(piece, pg, 0.0, last_dir_);
-  if (m.end_mm[n] != m.start_mm[n])
-    d0[static_cast<size_t>(n)] = m.end_mm[n] > m.start_mm[n] ? 1 : -1;
   ApproachDirections d1 = arc_tangent_directions(piece, pg, 1.0, d0);
   // An axis that turns round here takes up its play first.
   bool step = false;

@@ -99,7 +99,7 @@ LineBound fewest_lines(std::istream& in, const std::string& name, const Machine&
       for (double q = std::floor(lo / quarter) + 1; q * quarter < hi; q += 1) {
         const double u = (q * quarter - g.start_angle) / g.sweep;
         if (u <= 1e-9 || u >= 1 - 1e-9) continue;
-        const int a = static_cast<long long>(std::llround(q)) % 2 == 0 ? g.a0 : g.a1;
+        const int a = turning_axis(g, q);
         // The arc cut there, and the play taken up between the two arcs by
         // a move of its own: two lines more.
         if (c.reversal_jump_mm(nc::point_on(m, u), a, d) > tolerance_mm) b.turn_lines += 2;

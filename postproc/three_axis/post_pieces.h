@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -72,6 +73,13 @@ inline int word_index(const nc::Block& b, char L) {
   for (size_t k = 0; k < b.words.size(); ++k)
     if (b.words[k].letter == L) return static_cast<int>(k);
   return -1;
+}
+
+/// The axis of an arc's plane (a0, a1) that turns round at angle q pi/2: at
+/// 0 and pi the a0 coordinate (r cos) is extreme, at pi/2 and 3 pi/2 the a1
+/// coordinate (r sin).
+inline int turning_axis(const nc::ArcGeometry& g, double q) {
+  return static_cast<long long>(std::llround(q)) % 2 == 0 ? g.a0 : g.a1;
 }
 
 /// The directions of the plane's axes where the arc m (geometry g) runs at

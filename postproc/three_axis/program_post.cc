@@ -87,8 +87,7 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
       for (int a = 0; a < 3; ++a) {
         const nc::Word* w = b.find("XYZ"[a]);
         if (polar && a < 2) {  // @ ^ name X and Y: the nominal end, or its increment
-          emitted_mm_[a] =
-              st.absolute ? m.end_mm[a] : emitted_mm_[a] + (m.end_mm[a] - m.start_mm[a]);
+          emitted_mm_[a] = reach_as_written_mm(m, a);
           continue;
         }
         if (!w) continue;
@@ -221,9 +220,7 @@ bool ProgramPost::polar_needs_change(const nc::Block& b, const nc::BlockEffect& 
   const nc::State& s = interp_.state();
   for (int a = 0; a < 3; ++a) {
     const bool named = a < 2 || b.has('Z');
-    const double as_written = !s.absolute ? emitted_mm_[a] + (m.end_mm[a] - m.start_mm[a])
-                              : named     ? m.end_mm[a]
-                                          : emitted_mm_[a];
+    const double as_written = named || !s.absolute ? reach_as_written_mm(m, a) : emitted_mm_[a];
     if (std::abs(cmd[a] - as_written) / s.unit_mm >= half_unit(decimals())) return true;
   }
   return false;

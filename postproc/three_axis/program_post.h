@@ -185,6 +185,11 @@ class ProgramPost {
   /// *reached_mm to where the controller then stands.
   bool minimal_axis_words(const nc::Block& b, const BlockStyle& style, bool g53,
                           const Vector3d& cmd, nc::BlockEdit& e, Vector3d& reached_mm) const;
+  /// Where a move as written takes the controller on an axis it names: the
+  /// nominal end under G90, its increment from where it stands under G91.
+  double reach_as_written_mm(const nc::Motion& m, int a) const {
+    return interp_.state().absolute ? m.end_mm[a] : emitted_mm_[a] + (m.end_mm[a] - m.start_mm[a]);
+  }
   /// Whether a polar block (@ ^), as written, leaves the controller more
   /// than half an output unit off cmd on any axis.
   bool polar_needs_change(const nc::Block& b, const nc::BlockEffect& fx, const Vector3d& cmd) const;
