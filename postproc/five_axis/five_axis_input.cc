@@ -10,14 +10,10 @@
 
 #include "core/common/input_error.h"
 #include "gcode/nc_writer.h"
+#include "postproc/five_axis/apt_reader.h"
 
 namespace volmap::post {
 namespace {
-
-std::string upper(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return s;
-}
 
 std::string trim(const std::string& s) {
   size_t b = 0, e = s.size();
@@ -28,16 +24,9 @@ std::string trim(const std::string& s) {
 
 bool is_apt_statement(const std::string& line) {
   static const std::regex kApt(
-      R"(^\s*(GOTO|FEDRAT|PARTNO|MULTAX|UNITS|LOADTL|SPINDL|COOLNT|CUTTER|RAPID|FINI|TLAXIS|MACHIN|FROM|INTOL|OUTTOL|PPRINT|CLDATA|TOOLNO)\s*(/|$))",
+      R"(^\s*((GOTO|FEDRAT|PARTNO|MULTAX|UNITS?|LOADTL|LOAD|SPINDL|COOLNT|CUTTER|RAPID|FINI|TLAXIS|MACHIN|FROM|INTOL|OUTTOL|PPRINT|CLDATA|TOOLNO|CIRCLE|CYCLE|CSYS|MSYS|TLDATA|TOOL\s+PATH|CUTCOM|SELECT)\s*(/|$)|PARTNO\s|REMARK\s|\$\$))",
       std::regex::icase);
   return std::regex_search(line, kApt);
-}
-
-// Comment text that a G-code comment can hold.
-std::string comment_text(const std::string& s) {
-  std::string out;
-  for (char c : s) out += (c == '(' ? '[' : (c == ')' ? ']' : c));
-  return out;
 }
 
 }  // namespace
@@ -143,16 +132,18 @@ nc::ProgramSetup gcode_setup(const Machine& machine, InputForm form, const Initi
 }  // namespace
 
 FiveAxisReader::FiveAxisReader(std::istream& in, std::string file, const Machine& machine,
-                               InputForm form, const InitialPose& initial)
+                               InputForm form, const InitialPose& initial, double arc_chord_mm)
     : in_(in),
       file_(std::move(file)),
       machine_(machine),
       form_(resolve_form(in, form, buffered_)),
       interp_(gcode_setup(machine, form_, initial), file_) {
-  apt_.q = initial_angles(machine, initial);
-  apt_.tip_mm = initial.tip_mm;
-  apt_.axis = initial.axis.normalized();
+  if (form_ == InputForm::kApt)
+    apt_ =
+        std::make_unique<AptReader>(file_, initial_angles(machine, initial), initial, arc_chord_mm);
 }
+
+FiveAxisReader::~FiveAxisReader() = default;
 
 bool FiveAxisReader::read_raw(std::string& text) {
   if (!buffered_.empty()) {
@@ -177,135 +168,72 @@ void FiveAxisReader::fail(int column, const std::string& msg) const {
 }
 
 bool FiveAxisReader::next(FiveAxisLine& out) {
+  if (form_ == InputForm::kApt) {
+    if (pending_.empty() && !apt_statement()) return false;
+    out = std::move(pending_.front());
+    pending_.pop_front();
+    out.unit_mm = 1.0;  // the output is in mm (G21)
+    return true;
+  }
   std::string text;
   if (!read_raw(text)) return false;
   out = FiveAxisLine{};
   out.line = line_;
-  if (form_ == InputForm::kApt) {
-    // `$` at the end continues the statement on the next line.
-    std::string stmt = trim(text);
-    while (!stmt.empty() && stmt.back() == '$') {
-      stmt.pop_back();
-      std::string more;
-      if (!read_raw(more)) fail(0, "APT statement continued with '$' at the end of the file");
-      stmt += trim(more);
-    }
-    apt_line(stmt, out);
-  } else {
-    gcode_line(text, out);
-  }
-  out.unit_mm = form_ == InputForm::kApt ? apt_.unit_mm : interp_.state().unit_mm;
+  gcode_line(text, out);
+  out.unit_mm = interp_.state().unit_mm;
   return true;
 }
 
-void FiveAxisReader::apt_line(std::string stmt, FiveAxisLine& out) {
-  out.synthetic = true;
-  const std::string up = upper(stmt);
-  const size_t slash = up.find('/');
-  const std::string key = trim(slash == std::string::npos ? up : up.substr(0, slash));
-  std::vector<std::string> args;
-  if (slash != std::string::npos) {
-    std::string rest = up.substr(slash + 1);
-    size_t start = 0;
-    for (;;) {
-      const size_t comma = rest.find(',', start);
-      args.push_back(
-          trim(rest.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
-      if (comma == std::string::npos) break;
-      start = comma + 1;
+// APT's lexical rules: `$$` starts a comment to the end of the line (one
+// that ends in `$` goes on over the next lines: Creo); a statement ending in
+// a single `$` goes on on the next line; a line of numbers only gives more
+// points of the GOTO before it.
+bool FiveAxisReader::apt_statement() {
+  std::string text;
+  while (pending_.empty()) {
+    if (!read_raw(text)) {
+      apt_->finish(line_);
+      return false;
+    }
+    const int first = line_;
+    std::string code = text, comment;
+    const size_t cc = text.find("$$");
+    const bool has_comment = cc != std::string::npos;
+    if (has_comment) {
+      code = text.substr(0, cc);
+      comment = text.substr(cc + 2);
+      std::string more;
+      while (!trim(comment).empty() && trim(comment).back() == '$' && read_raw(more))
+        comment = trim(comment).substr(0, trim(comment).size() - 1) + " " + trim(more);
+    }
+    code = trim(code);
+    while (!code.empty() && code.back() == '$') {
+      code.pop_back();
+      std::string more;
+      if (!read_raw(more)) fail(0, "APT statement continued with '$' at the end of the file");
+      const size_t c2 = more.find("$$");
+      code += trim(c2 == std::string::npos ? more : more.substr(0, c2));
+    }
+    if (!code.empty()) {
+      if (code.find_first_not_of("0123456789+-.,eE \t") == std::string::npos &&
+          code.find_first_of("0123456789") != std::string::npos) {
+        if (!apt_->more_points(code, first, pending_))
+          throw InputError(file_, first,
+                           "a line of numbers with no record before it (a GOTO/ or a statement "
+                           "ending in '$'); check the CL export");
+      } else {
+        apt_->statement(code, first, pending_);
+      }
+    }
+    if (has_comment) apt_->comment(comment, first, pending_);
+    if (code.empty() && !has_comment) {
+      FiveAxisLine blank;
+      blank.line = first;
+      blank.synthetic = true;
+      pending_.push_back(std::move(blank));
     }
   }
-  auto number = [&](const std::string& s, double& v) {
-    const char* b = s.data() + (!s.empty() && s[0] == '+' ? 1 : 0);
-    const auto r = std::from_chars(b, s.data() + s.size(), v);
-    return r.ec == std::errc() && r.ptr == s.data() + s.size() && std::isfinite(v);
-  };
-  if (key.empty()) {
-    out.text = "";
-    return;
-  }
-  if (key == "GOTO") {
-    if (args.size() != 3 && args.size() != 6)
-      fail(1, "GOTO needs x,y,z or x,y,z,i,j,k; check the CLDATA export");
-    std::array<double, 6> v{};
-    for (size_t k = 0; k < args.size(); ++k)
-      if (!number(args[k], v[k])) fail(1, fmt::format("GOTO: '{}' is not a number", args[k]));
-    FiveAxisMove& m = out.move;
-    m.rapid = apt_.rapid;
-    apt_.rapid = false;
-    m.by_angles = false;
-    m.tip.kind = nc::MotionKind::kLinear;
-    m.tip.start_mm = apt_.tip_mm;
-    m.tip.end_mm = Eigen::Vector3d(v[0], v[1], v[2]) * apt_.unit_mm;
-    m.a0 = apt_.axis;
-    if (args.size() == 6) {
-      const Eigen::Vector3d a(v[3], v[4], v[5]);
-      if (a.norm() < 1e-9) fail(1, "GOTO: the tool axis i,j,k is zero");
-      apt_.axis = a.normalized();
-    }
-    m.a1 = apt_.axis;
-    m.q0 = m.q1 = apt_.q;
-    m.feed_mode = nc::kG94UnitsPerMinute;
-    m.feed = apt_.feed;
-    if (!m.rapid && apt_.feed <= 0) fail(1, "GOTO feed move before any FEDRAT; add FEDRAT/");
-    apt_.tip_mm = m.tip.end_mm;
-    out.has_move = true;
-    return;
-  }
-  if (key == "RAPID") {
-    apt_.rapid = true;
-    out.text = "(APT: RAPID)";
-    return;
-  }
-  if (key == "FEDRAT") {
-    double f = 0;
-    bool got = false;
-    for (const std::string& a : args) {
-      if (a == "MMPM" || a == "IPM") continue;
-      if (a == "MMPR" || a == "IPR")
-        fail(1, "FEDRAT per revolution is not supported; use MMPM or IPM");
-      if (number(a, f))
-        got = true;
-      else
-        fail(1, fmt::format("FEDRAT: '{}' is not understood", a));
-    }
-    if (!got || f <= 0) fail(1, "FEDRAT needs a positive feed");
-    apt_.feed = f * apt_.unit_mm;
-    out.text = "(APT: " + comment_text(stmt) + ")";
-    return;
-  }
-  if (key == "UNITS") {
-    if (!args.empty() && (args[0] == "INCHES" || args[0] == "INCH"))
-      apt_.unit_mm = 25.4;
-    else if (!args.empty() && args[0] == "MM")
-      apt_.unit_mm = 1.0;
-    else
-      fail(1, "UNITS/ takes MM or INCHES");
-    out.text = "(APT: " + comment_text(stmt) + ")";
-    return;
-  }
-  if (key == "SPINDL" && !args.empty()) {
-    double s = 0;
-    if (args[0] == "OFF")
-      out.text = "M5";
-    else if (number(args[0], s)) {
-      const bool ccw = std::find(args.begin(), args.end(), "CCLW") != args.end();
-      out.text = fmt::format("S{} {}", s, ccw ? "M4" : "M3");
-    } else {
-      out.text = "(APT: " + comment_text(stmt) + ")";
-    }
-    return;
-  }
-  if (key == "COOLNT" && !args.empty()) {
-    out.text = args[0] == "OFF" ? "M9" : (args[0] == "MIST" ? "M7" : "M8");
-    return;
-  }
-  if (key == "FINI") {
-    out.text = "M2";
-    out.ends_program = true;
-    return;
-  }
-  out.text = "(APT: " + comment_text(stmt) + ")";
+  return true;
 }
 
 }  // namespace volmap::post

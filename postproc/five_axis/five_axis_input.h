@@ -11,8 +11,10 @@
 //    A3= B3= C3=), unit or not (normalised), from the tip into the spindle.
 //    The nominal path: the tip along the line, the axis along the great
 //    circle (slerp).
-//  - kApt: APT / CLDATA, GOTO/x,y,z[,i,j,k], FEDRAT/, RAPID, UNITS/,
-//    `$` continuation lines; every other statement becomes a comment.
+//  - kApt: APT / CLDATA (apt_reader.h): GOTO and its kin, CIRCLE arcs,
+//    CYCLE holes, the dialects of NX, SOLIDWORKS CAM and Creo; records that
+//    move nothing become comments, records that may move the tool and are
+//    not understood exactly are refused.
 //  - kMachineAxes: RS274NGC of machine axis values (what the post writes):
 //    verify reads compensated programs in this form.
 //
@@ -37,6 +39,7 @@
 #include <array>
 #include <deque>
 #include <istream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -46,6 +49,8 @@
 #include "gcode/nc_interpreter.h"
 
 namespace volmap::post {
+
+class AptReader;
 
 enum class InputForm { kAuto, kTcp, kToolVector, kApt, kMachineAxes };
 
@@ -100,13 +105,17 @@ struct InitialPose {
 class FiveAxisReader {
  public:
   /// `form` kAuto: detected from the first 2000 lines (buffered).
+  /// `arc_chord_mm`: APT arcs about a tilted axis become chords that stand
+  /// at most this far off the arc.
   FiveAxisReader(std::istream& in, std::string file, const Machine& machine, InputForm form,
-                 const InitialPose& initial);
+                 const InitialPose& initial, double arc_chord_mm = 0.25e-3);
+  ~FiveAxisReader();
   /// The next line; false at the end. Throws InputError with file:line.
   bool next(FiveAxisLine& out);
   InputForm form() const { return form_; }
-  /// Whether the last line read ended with a newline (kept on output).
-  bool newline() const { return newline_; }
+  /// Whether the last line read ended with a newline (kept on output); an
+  /// APT statement's lines but its last always do.
+  bool newline() const { return newline_ || !pending_.empty(); }
   const std::string& line_ending() const { return line_ending_; }
 
  private:
@@ -124,7 +133,8 @@ class FiveAxisReader {
   /// state before it and what it did.
   void gcode_move(const GcodeWords& words, const nc::State& before, const nc::BlockEffect& effect,
                   FiveAxisLine& out) const;
-  void apt_line(std::string text, FiveAxisLine& out);
+  /// The next APT statement's lines into pending_; false at the end.
+  bool apt_statement();
   [[noreturn]] void fail(int column, const std::string& msg) const;
 
   std::istream& in_;
@@ -140,14 +150,8 @@ class FiveAxisReader {
   // no work offsets).
   nc::Interpreter interp_;
   // The APT form's.
-  struct AptState {
-    double unit_mm = 1.0;
-    double feed = 0.0;  ///< mm/min
-    Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();
-    AxisVector q;
-    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
-    bool rapid = false;  ///< RAPID: the next GOTO only
-  } apt_;
+  std::unique_ptr<AptReader> apt_;
+  std::deque<FiveAxisLine> pending_;  ///< lines of the APT statement read last
 };
 
 }  // namespace volmap::post

@@ -298,7 +298,8 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
   CorrectionOptions c;
   c.max_iterations = options.correction_iterations;
   const FiveAxisTransform tf(machine, errors, options.outside, c);
-  FiveAxisReader reader(in, in_name, machine, options.form, options.initial);
+  FiveAxisReader reader(in, in_name, machine, options.form, options.initial,
+                        options.tolerance_mm / 4);
   FiveAxisPost post(in_name, out, tf, options);
   post.run(reader);
   return post.report_;
@@ -310,7 +311,8 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
   if (const std::string why = options.invalid_reason(); !why.empty())
     throw std::invalid_argument(why);
   const FiveAxisTransform tf(machine, table, options.outside);
-  FiveAxisReader reader(in, in_name, machine, options.form, options.initial);
+  FiveAxisReader reader(in, in_name, machine, options.form, options.initial,
+                        options.tolerance_mm / 4);
   FiveAxisPost post(in_name, out, tf, options);
   post.run(reader);
   return post.report_;
