@@ -11,6 +11,13 @@
 namespace volmap::post {
 
 double AptReader::feed_of(const AptRecord& r, size_t from, bool& per_rev) const {
+  for (const std::string& a : r.args)
+    if (((a == "IPM" || a == "IPR") && unit_mm_ != 25.4) ||
+        ((a == "MMPM" || a == "MMPR") && unit_mm_ != 1.0))
+      fail(
+          fmt::format("a feed in {} while the lengths are read in {}: the CL file's units "
+                      "disagree; add UNITS/{} before its first record",
+                      a, unit_mm_ == 1.0 ? "mm" : "inches", unit_mm_ == 1.0 ? "INCHES" : "MM"));
   // FEDRAT/f[,unit] or FEDRAT/unit,f in any order (NX writes the unit
   // first, SOLIDWORKS CAM and Creo after); without a unit, per minute.
   double f = -1;
@@ -84,50 +91,7 @@ void AptReader::motion_record(const AptRecord& r, std::deque<FiveAxisLine>& out)
     add_comment(r, out);
     return;
   }
-  if (k == "FROM") {
-    const std::vector<double> v = numbers(r);
-    if (v.size() != 3 && v.size() != 6) fail("FROM/ takes x,y,z or x,y,z,i,j,k");
-    const Eigen::Vector3d p = Eigen::Vector3d(v[0], v[1], v[2]) * unit_mm_;
-    if (moved_ && (p - tip_mm_).norm() > 1e-6)
-      fail("FROM/ after motion, away from where the tool is: a FROM moves nothing");
-    tip_mm_ = p;
-    if (v.size() == 6) axis_ = Eigen::Vector3d(v[3], v[4], v[5]).normalized();
-    add_comment(r, out);
-    return;
-  }
-  if (k == "GODLTA") {
-    const std::vector<double> v = numbers(r);
-    Eigen::Vector3d d;
-    if (v.size() == 1) {
-      if (std::abs(axis_.z() - 1.0) > 1e-9)
-        fail(
-            "GODLTA/ with one value while the tool axis is not +Z: CAM systems differ on "
-            "whether it moves along Z or the tool axis; write GODLTA/dx,dy,dz");
-      d = Eigen::Vector3d(0, 0, v[0]);
-    } else if (v.size() == 3 || v.size() == 6) {
-      d = Eigen::Vector3d(v[0], v[1], v[2]);
-    } else {
-      fail("GODLTA/ takes dz, dx,dy,dz or dx,dy,dz,i,j,k");
-    }
-    const bool rapid = rapid_next_;
-    rapid_next_ = false;
-    Eigen::Vector3d a = axis_;
-    if (v.size() == 6) a = Eigen::Vector3d(v[3], v[4], v[5]);
-    if (cycle_) fail("GODLTA/ inside a CYCLE/: holes are GOTO points");
-    add_move(tip_mm_ + d * unit_mm_, a, rapid, feed_, out);
-    return;
-  }
-  if (k == "GOHOME") {
-    // NX: the return point; NX's posts write it as a rapid move
-    // (MOM_gohome_move calls MOM_rapid_move).
-    const std::vector<double> v = numbers(r);
-    if (v.size() != 3 && v.size() != 6) fail("GOHOME/ takes x,y,z or x,y,z,i,j,k");
-    if (cycle_) fail("GOHOME/ inside a CYCLE/; end the cycle with CYCLE/OFF first");
-    rapid_next_ = false;
-    const Eigen::Vector3d a = v.size() == 6 ? Eigen::Vector3d(v[3], v[4], v[5]) : axis_;
-    add_move(Eigen::Vector3d(v[0], v[1], v[2]) * unit_mm_, a, true, feed_, out);
-    return;
-  }
+  if (position_record(r, out)) return;
   if (k == "CIRCLE") {
     circle_record(r);
     add_comment(r, out);
@@ -150,6 +114,56 @@ void AptReader::motion_record(const AptRecord& r, std::deque<FiveAxisLine>& out)
       fmt::format("'{}' is not an APT record volmap knows; it may move the tool, so it is "
                   "refused: remove it if it moves nothing, or output the CL file without it",
                   apt_shown(r.text)));
+}
+
+// FROM, GODLTA, GOHOME. True when `r` was one.
+bool AptReader::position_record(const AptRecord& r, std::deque<FiveAxisLine>& out) {
+  const std::string& k = r.key;
+  if (k == "FROM") {
+    const std::vector<double> v = numbers(r);
+    if (v.size() != 3 && v.size() != 6) fail("FROM/ takes x,y,z or x,y,z,i,j,k");
+    const Eigen::Vector3d p = Eigen::Vector3d(v[0], v[1], v[2]) * unit_mm_;
+    if (moved_ && (p - tip_mm_).norm() > 1e-6)
+      fail("FROM/ after motion, away from where the tool is: a FROM moves nothing");
+    tip_mm_ = p;
+    if (v.size() == 6) axis_ = Eigen::Vector3d(v[3], v[4], v[5]).normalized();
+    add_comment(r, out);
+    return true;
+  }
+  if (k == "GODLTA") {
+    const std::vector<double> v = numbers(r);
+    Eigen::Vector3d d;
+    if (v.size() == 1) {
+      if (std::abs(axis_.z() - 1.0) > 1e-9)
+        fail(
+            "GODLTA/ with one value while the tool axis is not +Z: CAM systems differ on "
+            "whether it moves along Z or the tool axis; write GODLTA/dx,dy,dz");
+      d = Eigen::Vector3d(0, 0, v[0]);
+    } else if (v.size() == 3 || v.size() == 6) {
+      d = Eigen::Vector3d(v[0], v[1], v[2]);
+    } else {
+      fail("GODLTA/ takes dz, dx,dy,dz or dx,dy,dz,i,j,k");
+    }
+    const bool rapid = rapid_next_;
+    rapid_next_ = false;
+    Eigen::Vector3d a = axis_;
+    if (v.size() == 6) a = Eigen::Vector3d(v[3], v[4], v[5]);
+    if (cycle_) fail("GODLTA/ inside a CYCLE/: holes are GOTO points");
+    add_move(tip_mm_ + d * unit_mm_, a, rapid, feed_, out);
+    return true;
+  }
+  if (k == "GOHOME") {
+    // NX: the return point; NX's posts write it as a rapid move
+    // (MOM_gohome_move calls MOM_rapid_move).
+    const std::vector<double> v = numbers(r);
+    if (v.size() != 3 && v.size() != 6) fail("GOHOME/ takes x,y,z or x,y,z,i,j,k");
+    if (cycle_) fail("GOHOME/ inside a CYCLE/; end the cycle with CYCLE/OFF first");
+    rapid_next_ = false;
+    const Eigen::Vector3d a = v.size() == 6 ? Eigen::Vector3d(v[3], v[4], v[5]) : axis_;
+    add_move(Eigen::Vector3d(v[0], v[1], v[2]) * unit_mm_, a, true, feed_, out);
+    return true;
+  }
+  return false;
 }
 
 bool AptReader::more_points(const std::string& text, int line, std::deque<FiveAxisLine>& out) {

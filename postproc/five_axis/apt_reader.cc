@@ -196,12 +196,24 @@ void AptReader::comment(const std::string& text, int line, std::deque<FiveAxisLi
   add_text("(APT: $$" + comment_text(text) + ")", out);
 }
 
-void AptReader::finish(int line) const {
+void AptReader::preset_units(double unit_mm, int line, std::deque<FiveAxisLine>& out) {
+  unit_mm_ = unit_mm;
+  add_text(fmt::format("(volmap post: no UNITS record; lengths in {}, as FEDRAT/ on line {} says)",
+                       unit_mm == 25.4 ? "inches" : "mm", line),
+           out);
+}
+
+void AptReader::finish(int line, std::deque<FiveAxisLine>& out) {
+  line_ = line;
   if (circle_ && !circle_goto_)
     throw InputError(file_, line,
                      fmt::format("the CIRCLE/ of line {} has no GOTO/ after it: the file is cut "
                                  "short; export the CL file again",
                                  circle_->line));
+  if (ended_) return;
+  ended_ = true;
+  add_text("M2 (volmap post: the CL file ends without FINI)", out);
+  out.back().ends_program = true;
 }
 
 void AptReader::statement(const std::string& text, int line, std::deque<FiveAxisLine>& out) {
@@ -297,6 +309,7 @@ bool AptReader::machine_record(const AptRecord& r, std::deque<FiveAxisLine>& out
     return true;
   }
   if (k == "FINI") {
+    ended_ = true;
     add_text("M2", out);
     out.back().ends_program = true;
     return true;

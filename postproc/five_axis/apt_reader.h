@@ -59,9 +59,14 @@ class AptReader {
   /// A `$$` comment (the text after `$$`): kept as a comment; read for the
   /// dialect cues and Creo's CUTCOM_GEOMETRY_TYPE.
   void comment(const std::string& text, int line, std::deque<FiveAxisLine>& out);
-  /// The end of the file: a CIRCLE still waiting for its GOTO is an error.
-  void finish(int line) const;
+  /// The end of the file: a CIRCLE still waiting for its GOTO is an error;
+  /// a file without FINI (NX writes none) gets the program end M2, once.
+  void finish(int line, std::deque<FiveAxisLine>& out);
   AptDialect dialect() const { return dialect_; }
+  /// The units of a file without UNITS/: those of its first FEDRAT's unit
+  /// word (NX writes no UNITS record), found by the caller ahead of the
+  /// reading; `line`: that FEDRAT's. Said in a comment line.
+  void preset_units(double unit_mm, int line, std::deque<FiveAxisLine>& out);
 
  private:
   struct Cycle {
@@ -85,6 +90,7 @@ class AptReader {
   void add_comment(const AptRecord& r, std::deque<FiveAxisLine>& out) const;
   void note_dialect(const AptRecord& r);
   void motion_record(const AptRecord& r, std::deque<FiveAxisLine>& out);
+  bool position_record(const AptRecord& r, std::deque<FiveAxisLine>& out);
   bool machine_record(const AptRecord& r, std::deque<FiveAxisLine>& out);
   bool frame_record(const AptRecord& r, std::deque<FiveAxisLine>& out);
   std::vector<double> numbers(const AptRecord& r, size_t from = 0) const;
@@ -120,7 +126,8 @@ class AptReader {
   std::optional<Circle> circle_;  ///< CIRCLE read, its GOTO not yet
   bool circle_goto_ = false;      ///< the open GOTO is the circle's
   std::optional<Cycle> cycle_, last_cycle_;
-  int tool_ = -1;  ///< the first LOAD/TOOL's number
+  bool ended_ = false;  ///< FINI read, or the end of the file
+  int tool_ = -1;       ///< the first LOAD/TOOL's number
   bool spindle_ccw_ = false;
   double spindle_rpm_ = 0.0;
   std::optional<Eigen::Vector3d> csys_axis_;  ///< SOLIDWORKS CAM CSYS's third column, to check

@@ -90,14 +90,32 @@ namespace {
 
 // kAuto: the form of the first 2000 lines, which stay in `buffered`.
 InputForm resolve_form(std::istream& in, InputForm form, std::deque<std::string>& buffered) {
-  if (form != InputForm::kAuto) return form;
+  if (form != InputForm::kAuto && form != InputForm::kApt) return form;
   std::vector<std::string> first;
   std::string l;
   while (first.size() < 2000 && std::getline(in, l)) {
     first.push_back(l);
     buffered.push_back(l + (in.eof() ? "" : "\n"));
   }
-  return detect_input_form(first);
+  return form == InputForm::kApt ? form : detect_input_form(first);
+}
+
+// APT without UNITS/ before its first FEDRAT/ (NX CLSF): the units of that
+// FEDRAT's unit word, and its line (0: none found, or UNITS/ comes first).
+std::pair<double, int> apt_units_from_feed(const std::deque<std::string>& lines) {
+  int n = 0;
+  for (const std::string& raw : lines) {
+    ++n;
+    std::string t;
+    for (char c : raw.substr(0, raw.find("$$")))
+      if (!std::isspace(static_cast<unsigned char>(c)))
+        t += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    if (t.rfind("UNITS/", 0) == 0 || t.rfind("UNIT/", 0) == 0) return {1.0, 0};
+    if (t.rfind("FEDRAT/", 0) != 0) continue;
+    if (t.find("IPM") != std::string::npos || t.find("IPR") != std::string::npos) return {25.4, n};
+    if (t.find("MMPM") != std::string::npos || t.find("MMPR") != std::string::npos) return {1.0, n};
+  }
+  return {1.0, 0};
 }
 
 // The rotary angles of `initial` (rad, AxisVector order), zero where the
@@ -138,9 +156,12 @@ FiveAxisReader::FiveAxisReader(std::istream& in, std::string file, const Machine
       machine_(machine),
       form_(resolve_form(in, form, buffered_)),
       interp_(gcode_setup(machine, form_, initial), file_) {
-  if (form_ == InputForm::kApt)
+  if (form_ == InputForm::kApt) {
     apt_ =
         std::make_unique<AptReader>(file_, initial_angles(machine, initial), initial, arc_chord_mm);
+    if (const auto [unit_mm, line] = apt_units_from_feed(buffered_); line > 0)
+      apt_->preset_units(unit_mm, line, pending_);
+  }
 }
 
 FiveAxisReader::~FiveAxisReader() = default;
@@ -192,8 +213,8 @@ bool FiveAxisReader::apt_statement() {
   std::string text;
   while (pending_.empty()) {
     if (!read_raw(text)) {
-      apt_->finish(line_);
-      return false;
+      apt_->finish(line_, pending_);
+      return !pending_.empty();
     }
     const int first = line_;
     std::string code = text, comment;

@@ -85,6 +85,14 @@ TEST(AptReader, GotoUnitsFeedAndOneShotRapid) {
   EXPECT_TRUE(r.lines.back().ends_program);
   // The output is in mm whatever the CL file's units.
   for (const auto& l : r.lines) EXPECT_EQ(l.unit_mm, 1.0);
+  // NX writes no UNITS record: its first FEDRAT's unit word says, for the
+  // GOTOs before it too; a unit word that contradicts the units is refused.
+  const Read nx = read_apt("TOOL PATH/X\nRAPID\nGOTO/1,0,0\nFEDRAT/IPM,10.0000\nGOTO/2,0,0\n");
+  expect_moves(nx.moves, {{{25.4, 0, 0}, true, 0}, {{50.8, 0, 0}, false, 254}});
+  EXPECT_NE(nx.text.find("no UNITS record; lengths in inches, as FEDRAT/ on line 4 says"),
+            std::string::npos);
+  EXPECT_NE(refusal("UNITS/MM\nFEDRAT/IPM,10\n").find("t.apt:2: a feed in IPM while the lengths"),
+            std::string::npos);
 }
 
 TEST(AptReader, FromGodltaGohomeAndToolAxis) {

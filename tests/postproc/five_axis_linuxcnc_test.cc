@@ -25,6 +25,7 @@
 #include "gcode/nc_block.h"
 #include "gcode/nc_path.h"
 #include "postproc/five_axis/five_axis_input.h"
+#include "tests/postproc/five_axis_canon.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/rs274.h"
 #include "tests/support/samples.h"
@@ -33,12 +34,15 @@ namespace volmap {
 namespace {
 
 namespace fs = std::filesystem;
+using test::canonical_feeds;
+using test::have_rs274;
+using test::Pose5;
+using test::worst_tip_distance_mm;
+using test::written_feeds;
 
 const char* kDemos =
     "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/vismach/5axis/table-rotary-tilting/"
     "demos/";
-
-bool have_rs274() { return std::system("command -v rs274 >/dev/null 2>&1") == 0; }
 
 // The program (uncompressed into the test's temporary folder when only a
 // .gz is installed); empty when missing.
@@ -50,51 +54,6 @@ std::string demo(const std::string& name) {
     if (std::system(("gzip -dc " + plain + ".gz > " + out).c_str()) == 0) return out;
   }
   return "";
-}
-
-struct Pose5 {
-  double x, y, z, a, c;
-};
-
-// STRAIGHT_FEED(x, y, z, a, b, c) points of rs274's canonical output.
-std::vector<Pose5> canonical_feeds(const std::string& canon, std::string& errors) {
-  std::ifstream f(canon);
-  std::string line;
-  std::vector<Pose5> out;
-  while (std::getline(f, line)) {
-    if (line.find("rror") != std::string::npos) errors += line + "\n";
-    const size_t at = line.find("STRAIGHT_FEED(");
-    if (at == std::string::npos) continue;
-    std::vector<double> v;
-    std::stringstream ss(line.substr(at + 14, line.rfind(')') - at - 14));
-    std::string tok;
-    while (std::getline(ss, tok, ',')) v.push_back(std::strtod(tok.c_str(), nullptr));
-    if (v.size() >= 6) out.push_back({v[0], v[1], v[2], v[3], v[5]});
-  }
-  return out;
-}
-
-// Feed positions volmap wrote (X Y Z A C, modal words carried).
-std::vector<Pose5> written_feeds(const std::string& program) {
-  std::ifstream f(program);
-  std::string line;
-  std::vector<Pose5> out;
-  int motion = -1, n = 0;
-  while (std::getline(f, line)) {
-    const nc::Block b = nc::lex_block(line, ++n, program);
-    Pose5 p{};
-    bool move = false;
-    for (const nc::Word& w : b.words) {
-      if (w.letter == 'G' && (w.code10 == 0 || w.code10 == 10)) motion = w.code10;
-      if (w.letter == 'X') p.x = w.value, move = true;
-      if (w.letter == 'Y') p.y = w.value;
-      if (w.letter == 'Z') p.z = w.value;
-      if (w.letter == 'A') p.a = w.value;
-      if (w.letter == 'C') p.c = w.value;
-    }
-    if (move && motion == 10) out.push_back(p);
-  }
-  return out;
 }
 
 // The nominal feed moves of the input, in workpiece coordinates.
@@ -138,39 +97,6 @@ void expect_c_never_jumps_half_a_turn(const std::string& out) {
     }
   }
   EXPECT_GT(moves, 100);
-}
-
-// The farthest of rs274's feed points, run on the real machine (model), from
-// the nominal path (mm); slack_mm: what rs274's printed decimals allow.
-double worst_tip_distance_mm(const std::vector<Pose5>& feeds, const std::vector<nc::Motion>& path,
-                             const ErrorModel& model, double slack_mm) {
-  size_t cursor = 0;
-  double worst = 0;
-  for (const Pose5& p : feeds) {
-    AxisVector u(5);
-    u << p.x, p.y, p.z, p.a * M_PI / 180, p.c * M_PI / 180;
-    const Eigen::Vector3d tip = model.actual(u).tip_mm;
-    // The first move from the cursor on that the point lies on (a path
-    // that comes back over itself has end points on several moves), else
-    // the nearest in the window.
-    double best = 1e300;
-    size_t best_k = cursor;
-    for (size_t k = cursor; k < std::min(path.size(), cursor + 12); ++k) {
-      const double d = nc::distance_to_path(path[k], tip);
-      if (d <= 1e-3 + slack_mm) {
-        best = d;
-        best_k = k;
-        break;
-      }
-      if (d < best) {
-        best = d;
-        best_k = k;
-      }
-    }
-    cursor = best_k;
-    worst = std::max(worst, best);
-  }
-  return worst;
 }
 
 class RealFiveAxisProgram : public ::testing::TestWithParam<const char*> {};
