@@ -27,7 +27,8 @@ const std::map<std::string, std::function<void(std::string_view)>>& targets() {
       {"post_fuzz", fuzz::post},
       {"recordings_csv_fuzz", fuzz::recordings_csv},
       {"errors_csv_fuzz", fuzz::errors_csv},
-      {"machine_json_fuzz", fuzz::machine_json}};
+      {"machine_json_fuzz", fuzz::machine_json},
+      {"apt_reader_fuzz", fuzz::apt_reader}};
   return t;
 }
 

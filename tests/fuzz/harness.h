@@ -26,6 +26,7 @@
 #include "gcode/nc_block.h"
 #include "gcode/nc_interpreter.h"
 #include "gcode/program_reader.h"
+#include "postproc/five_axis/five_axis_input.h"
 #include "postproc/three_axis/post_program.h"
 
 namespace volmap::fuzz {
@@ -192,6 +193,28 @@ inline void machine_json(std::string_view text) {
     }
     const ToolPose p = nominal_forward(m, u);
     require(p.tip_mm.allFinite() && p.axis.allFinite());
+  } catch (const InputError&) {
+  }
+}
+
+/// The APT / CLDATA reader (five-axis post), on the five-axis sample
+/// machine: every line and move to the end, or an InputError.
+inline void apt_reader(std::string_view text) {
+  static const Machine machine =
+      load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/lei-hsu-xyzac.json");
+  std::istringstream in{std::string(text)};
+  try {
+    post::FiveAxisReader reader(in, "fuzz.apt", machine, post::InputForm::kApt, post::InitialPose{},
+                                1e-3);
+    post::FiveAxisLine l;
+    int moves = 0;
+    while (reader.next(l) && moves < 100000) {
+      if (!l.has_move) continue;
+      ++moves;
+      const nc::Motion& m = l.move.tip;
+      require(m.start_mm.allFinite() && m.end_mm.allFinite() && m.center_mm.allFinite() &&
+              l.move.a1.allFinite() && std::isfinite(l.move.feed));
+    }
   } catch (const InputError&) {
   }
 }

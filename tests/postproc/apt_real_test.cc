@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <map>
 
 #include "core/common/input_error.h"
@@ -117,6 +118,7 @@ TEST(AptRealFiles, ArcsTurnTheWayTheToolEntersThem) {
   }
   for (const char* cam : {"creo8", "nx", "solidworkscam"}) {
     SCOPED_TRACE(cam);
+    std::cout << cam << ": " << with_tool[cam] << " arcs entered along their tangent\n";
     EXPECT_GE(with_tool[cam], 10);
     EXPECT_EQ(against[cam], 0);
   }
