@@ -4,6 +4,7 @@
 
 #include "cli/commands.h"
 #include "cli/parse_util.h"
+#include "gcode/linuxcnc_files.h"
 
 namespace volmap::cli {
 
@@ -57,14 +58,19 @@ Machine FiveAxisCliOptions::place_part(Machine m) const {
 
 post::InputForm FiveAxisCliOptions::form() const { return *post::parse_input_form(input_form); }
 
+std::map<int, double> FiveAxisCliOptions::tool_offsets_mm(const ProgramSetupOptions& placement) {
+  if (placement.tool_table.empty()) return {};
+  nc::ProgramSetup setup;
+  nc::read_tool_table(placement.tool_table, setup);
+  return setup.tool_length_mm;
+}
+
 post::InitialPose FiveAxisCliOptions::initial(const Machine& m,
                                               const ProgramSetupOptions& placement) const {
-  if (!placement.work_offset.empty() || !placement.var_file.empty() ||
-      !placement.tool_table.empty())
+  if (!placement.work_offset.empty() || !placement.var_file.empty())
     throw UsageError(
-        "five-axis programs: --work-offset, --var-file and --tool-table do not apply; place the "
-        "part with "
-        "--part-origin and give the tool in the machine file");
+        "five-axis programs: --work-offset and --var-file do not apply; place the part with "
+        "--part-origin");
   post::InitialPose p;
   p.q = m.home;
   if (placement.initial.empty()) return p;

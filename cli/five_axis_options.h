@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <map>
 #include <string>
 
 #include "cli/program_setup.h"
@@ -32,6 +33,9 @@ struct FiveAxisCliOptions {
   /// --initial-position X,Y,Z[,rotary...]: the tip in program coordinates
   /// (mm) and the rotary angles (degrees).
   post::InitialPose initial(const Machine& m, const ProgramSetupOptions& placement) const;
+  /// --tool-table: tool number -> how much longer than the machine file's
+  /// tool (mm); empty without a table.
+  static std::map<int, double> tool_offsets_mm(const ProgramSetupOptions& placement);
 };
 
 }  // namespace volmap::cli

@@ -72,6 +72,7 @@ int run_five_axis(const Opts& o, const Machine& m) {
   opt.initial = o.five.initial(m, o.placement);
   opt.outside = o.clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
   opt.correction_iterations = o.five.iterate ? 20 : 1;
+  opt.tool_offsets_mm = FiveAxisCliOptions::tool_offsets_mm(o.placement);
   std::ifstream file_in;
   std::istream* in = &std::cin;
   std::string in_name = "<stdin>";

@@ -14,8 +14,9 @@ void ProgramSetupOptions::add_to(CLI::App& sub) {
                  "Machine position X,Y,Z (mm) of the program origin for G54");
   sub.add_option("--var-file", var_file, "LinuxCNC parameter file with the G54-G59.3 offsets");
   sub.add_option("--tool-table", tool_table,
-                 "LinuxCNC tool table (.tbl) for G43 H: Z is the tool length offset in mm, "
-                 "relative to the machine file's tool");
+                 "LinuxCNC tool table (.tbl) for G43 H (five axes: the lengths of the tools the "
+                 "program changes to): Z is the tool length offset in mm, relative to the machine "
+                 "file's tool");
   sub.add_option("--initial-position", initial,
                  "Where the tool stands at the start, X,Y,Z in program coordinates (G54, mm); "
                  "for programs that never command an axis");

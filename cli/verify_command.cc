@@ -95,6 +95,7 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
   opt.sample_step_mm = o.step_mm;
   opt.initial = o.five.initial(m, o.placement);
   opt.outside = o.clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+  opt.tool_offsets_mm = FiveAxisCliOptions::tool_offsets_mm(o.placement);
   const post::FiveAxisVerifyResult r =
       post::verify_five_axis(a, o.nominal, b, o.program, m, e, opt);
   write_report(report.get(), o, m, r, true);

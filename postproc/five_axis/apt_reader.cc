@@ -325,15 +325,10 @@ bool AptReader::machine_record(const AptRecord& r, std::deque<FiveAxisLine>& out
     if ((k == "LOAD" && (r.args.empty() || r.args[0] != "TOOL")) || r.args.size() <= at ||
         !apt_number(r.args[at], n))
       fail(fmt::format("'{}': a tool load is LOAD/TOOL,n or LOADTL/n", apt_shown(r.text)));
-    const int tool = static_cast<int>(n);
-    if (tool_ >= 0 && tool != tool_ && moved_)
-      fail(fmt::format(
-          "a second tool (T{} after T{}): the five-axis post computes the machine axes for one "
-          "tool, the machine file's (tool_length_mm); split the CL file at this record and post "
-          "each part with its tool's length",
-          tool, tool_));
-    if (tool_ < 0) tool_ = tool;
+    if (n < 0 || n != std::floor(n) || n > 99999)
+      fail(fmt::format("'{}': the tool number must be a whole number", apt_shown(r.text)));
     add_comment(r, out);
+    out.back().tool = static_cast<int>(n);
     return true;
   }
   return false;
@@ -361,8 +356,14 @@ bool AptReader::frame_record(const AptRecord& r, std::deque<FiveAxisLine>& out) 
                       "system; output the CL data in one frame (no CSYS)",
                       apt_dialect_name(dialect_)));
     // SOLIDWORKS CAM writes the GOTO points in the part frame; CSYS's third
-    // column is the setup's tool axis, checked at the next GOTO.
-    csys_axis_ = Eigen::Vector3d(v[2], v[6], v[10]);
+    // column is the setup's tool axis: that of the GOTOs after it, which
+    // carry i,j,k only where it is not +Z (checked at the next GOTO).
+    if (dialect_ == AptDialect::kSolidworks) {
+      const Eigen::Vector3d z(v[2], v[6], v[10]);
+      if (z.norm() < 1e-9) fail("CSYS/: the third column (the tool axis) is zero");
+      axis_ = z.normalized();
+      csys_axis_ = axis_;
+    }
     add_text("(APT: " + comment_text(r.text) + " -- the GOTO points are in the part frame)", out);
     return true;
   }

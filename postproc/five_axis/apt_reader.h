@@ -127,7 +127,6 @@ class AptReader {
   bool circle_goto_ = false;      ///< the open GOTO is the circle's
   std::optional<Cycle> cycle_, last_cycle_;
   bool ended_ = false;  ///< FINI read, or the end of the file
-  int tool_ = -1;       ///< the first LOAD/TOOL's number
   bool spindle_ccw_ = false;
   double spindle_rpm_ = 0.0;
   std::optional<Eigen::Vector3d> csys_axis_;  ///< SOLIDWORKS CAM CSYS's third column, to check

@@ -90,6 +90,7 @@ struct FiveAxisLine {
   double unit_mm = 1.0;       ///< units after the line (25.4 under G20)
   int motion_code = -1;       ///< motion G code x10 written in the line (-1 none)
   bool ends_program = false;  ///< M2 / M30
+  int tool = -1;              ///< a tool change to this tool (APT LOAD/TOOL, LOADTL; M6)
 };
 
 /// Where the tool stands before the program commands it: the tip in

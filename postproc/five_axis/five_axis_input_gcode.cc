@@ -65,6 +65,7 @@ void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
   nc::BlockEffect effect;
   interp_.execute(out.strip.empty() ? b : stripped, effect);
   out.motion_code = words.motion_word;
+  if (interp_.state().tool != before.tool) out.tool = interp_.state().tool;  // M6
   gcode_move(words, before, effect, out);
 }
 

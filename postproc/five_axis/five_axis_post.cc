@@ -44,7 +44,7 @@ double FiveAxisPost::move_time_min(const FiveAxisMove& m) const {
 
 std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lower, bool spaces,
                                     int motion, double time_min, const AxisVector& from) {
-  const Machine& mach = tf_.machine();
+  const Machine& mach = tf_->machine();
   std::string s;
   auto word = [&](char letter) {
     if (!s.empty() && spaces) s += ' ';
@@ -99,9 +99,31 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
   return s;
 }
 
+void FiveAxisPost::change_tool(const FiveAxisLine& l) {
+  if (!tools_.has_table()) {
+    if (started_ && tool_ >= 0 && l.tool != tool_)
+      fail(fmt::format(
+          "a second tool (T{} after T{}): the machine axes are computed for the machine file's "
+          "tool length; give --tool-table with the program's tools, or post each tool's part "
+          "separately",
+          l.tool, tool_));
+    tool_ = l.tool;
+    return;
+  }
+  try {
+    tf_ = &tools_.get(l.tool);
+  } catch (const std::invalid_argument& e) {
+    fail(std::string(e.what()) + "; add it to the tool table");
+  }
+  tool_ = l.tool;
+  rapid_due_ = started_;
+}
+
 void FiveAxisPost::write_line_without_move(const FiveAxisLine& l, bool lower) {
   if (l.synthetic) {
-    emit(l.text);
+    // APT's tool change: the controller changes the tool when a table
+    // gives the program's tools.
+    emit(l.tool >= 0 && tools_.has_table() ? fmt::format("T{} M6 {}", l.tool, l.text) : l.text);
     return;
   }
   nc::BlockEdit edit;
@@ -143,7 +165,7 @@ void FiveAxisPost::pieces_of_move(const FiveAxisMove& m) {
     pieces_.assign(1, Piece{command(n.u), 1.0});
     c_ = pieces_[0].c;
     u_nom_ = n.u;
-    residual_angle_ = tf_.zero() ? 0.0 : angle_between(tf_.actual(c_).axis, n.v.axis);
+    residual_angle_ = tf_->zero() ? 0.0 : angle_between(tf_->actual(c_).axis, n.v.axis);
   } else {
     segment(m, pieces_);
   }
@@ -199,6 +221,9 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
     return;
   }
   const FiveAxisMove& m = l.move;
+  if (rapid_due_ && !m.rapid)
+    fail("a feed move right after a tool change: the new tool's first move must be a rapid");
+  rapid_due_ = false;
   ++report_.moves;
   start_if_needed(m);
   const int motion = m.rapid ? nc::kG0Rapid : nc::kG1Linear;
@@ -210,7 +235,7 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
   // smallest span (C turning to the new azimuth as the tool leaves the
   // singular position) at least its share of the move's rotary travel, so
   // that the turn is not commanded in no time.
-  const Machine& mach = tf_.machine();
+  const Machine& mach = tf_->machine();
   auto rotary_travel = [&](const AxisVector& a, const AxisVector& b) {
     double r = 0;
     for (int k = 0; k < mach.axis_count(); ++k)
@@ -260,6 +285,7 @@ void FiveAxisPost::run(FiveAxisReader& reader) {
     reader_newline_ = reader.newline();
     ++report_.lines;
     try {
+      if (l.tool >= 0) change_tool(l);
       if (l.has_move && l.move.by_angles) unwrap_turns(l.move);
       write_line(l);
     } catch (const InputError&) {
@@ -297,10 +323,12 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
     throw std::invalid_argument(why);
   CorrectionOptions c;
   c.max_iterations = options.correction_iterations;
-  const FiveAxisTransform tf(machine, errors, options.outside, c);
+  ToolTransforms tools(machine, options.tool_offsets_mm, [&](const Machine& m) {
+    return std::make_unique<FiveAxisTransform>(m, errors, options.outside, c);
+  });
   FiveAxisReader reader(in, in_name, machine, options.form, options.initial,
                         options.tolerance_mm / 4);
-  FiveAxisPost post(in_name, out, tf, options);
+  FiveAxisPost post(in_name, out, tools, options);
   post.run(reader);
   return post.report_;
 }
@@ -310,10 +338,15 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
                                   const FiveAxisPostOptions& options) {
   if (const std::string why = options.invalid_reason(); !why.empty())
     throw std::invalid_argument(why);
-  const FiveAxisTransform tf(machine, table, options.outside);
+  if (!options.tool_offsets_mm.empty())
+    throw std::invalid_argument(
+        "a five-axis table is for the tool it was made with: give no tool table with --table");
+  ToolTransforms tools(machine, {}, [&](const Machine& m) {
+    return std::make_unique<FiveAxisTransform>(m, table, options.outside);
+  });
   FiveAxisReader reader(in, in_name, machine, options.form, options.initial,
                         options.tolerance_mm / 4);
-  FiveAxisPost post(in_name, out, tf, options);
+  FiveAxisPost post(in_name, out, tools, options);
   post.run(reader);
   return post.report_;
 }

@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <map>
 #include <string>
 
 #include "core/model/error_model.h"
@@ -55,6 +56,10 @@ struct FiveAxisPostOptions {
   OutsidePolicy outside = OutsidePolicy::kError;
   /// One-step correction (1) or iterated to the exact solution (more).
   int correction_iterations = 1;
+  /// Tool table: tool number -> how much longer than the machine file's
+  /// tool (mm; LinuxCNC .tbl Z). Empty: the machine file's tool is the only
+  /// one (a second tool after moves is refused).
+  std::map<int, double> tool_offsets_mm;
 
   std::string invalid_reason() const;
 };

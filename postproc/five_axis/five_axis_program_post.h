@@ -37,10 +37,10 @@ struct NominalAt {
 
 class FiveAxisPost {
  public:
-  FiveAxisPost(const std::string& file, std::ostream& out, const FiveAxisTransform& tf,
+  FiveAxisPost(const std::string& file, std::ostream& out, ToolTransforms& tools,
                const FiveAxisPostOptions& o)
-      : file_(file), out_(out), o_(o), tf_(tf) {
-    const Machine& m = tf_.machine();
+      : file_(file), out_(out), o_(o), tools_(tools), tf_(&tools.get(-1)) {
+    const Machine& m = tf_->machine();
     u_nom_ = m.home;
     for (int k = 0; k < m.axis_count(); ++k)
       if (is_rotary(m.axis_order[static_cast<size_t>(k)]) && o.initial.q.size() == m.axis_count())
@@ -56,22 +56,22 @@ class FiveAxisPost {
     n.v.tip_mm = nc::point_on(m.tip, s);
     if (m.by_angles) {
       const AxisVector q = m.q0 + s * (m.q1 - m.q0);
-      n.u = tf_.axes_for_angles(q, n.v.tip_mm);
-      n.v.axis = tf_.nominal(n.u).axis;
+      n.u = tf_->axes_for_angles(q, n.v.tip_mm);
+      n.v.axis = tf_->nominal(n.u).axis;
     } else {
       n.v.axis = slerp_axis(m.a0, m.a1, s);
-      n.u = tf_.axes_for_pose(n.v, previous, &n.singular);
+      n.u = tf_->axes_for_pose(n.v, previous, &n.singular);
     }
     return n;
   }
   AxisVector command(const AxisVector& u_nom) {
-    const Machine& m = tf_.machine();
+    const Machine& m = tf_->machine();
     try {
       check_within_travel(m, u_nom);
     } catch (const std::invalid_argument& e) {
       fail(std::string(e.what()) + "; place the part elsewhere on the table (`part_origin`)");
     }
-    const AxisVector c = tf_.command(u_nom);
+    const AxisVector c = tf_->command(u_nom);
     double lin = 0, rot = 0;
     for (int k = 0; k < m.axis_count(); ++k) {
       const double d = c[k] - u_nom[k];
@@ -97,7 +97,7 @@ class FiveAxisPost {
   };
   // The written axis words of c without letters (to find repeated lines).
   std::string axes_key(const AxisVector& c, double unit_mm) const {
-    const Machine& mach = tf_.machine();
+    const Machine& mach = tf_->machine();
     const int dec = o_.decimals >= 0 ? o_.decimals : (unit_mm > 1.0 ? 5 : 4);
     std::string k;
     for (int i = 0; i < mach.axis_count(); ++i) {
@@ -138,7 +138,14 @@ class FiveAxisPost {
   std::string file_;
   std::ostream& out_;
   FiveAxisPostOptions o_;
-  const FiveAxisTransform& tf_;
+  /// A tool change (FiveAxisLine::tool): the transform of the new tool
+  /// from the tool table; without one, a second tool after moves is
+  /// refused.
+  void change_tool(const FiveAxisLine& l);
+  ToolTransforms& tools_;
+  const FiveAxisTransform* tf_;  ///< the tool in the spindle's
+  int tool_ = -1;                ///< its number (-1: the machine file's)
+  bool rapid_due_ = false;       ///< a tool was changed: the next move must be a rapid
   int line_ = 0;
   std::string line_ending_ = "\n";
   bool reader_newline_ = true;
@@ -156,7 +163,7 @@ class FiveAxisPost {
   // every later programmed angle, so feed moves sweep exactly as
   // programmed: C never jumps by 180 degrees or more between two lines.
   void unwrap_turns(FiveAxisMove& m) {
-    const Machine& mach = tf_.machine();
+    const Machine& mach = tf_->machine();
     if (turns_.size() != mach.axis_count()) turns_ = AxisVector::Zero(mach.axis_count());
     if (m.q1.size() != mach.axis_count()) return;
     for (int k = 0; k < mach.axis_count(); ++k) {

@@ -14,8 +14,8 @@ void FiveAxisPost::start_if_needed(const FiveAxisMove& m) {
   // The first move starts where the reader's initial pose is.
   const NominalAt n = nominal_at(m, 0.0, u_nom_);
   u_nom_ = n.u;
-  c_ = tf_.command(n.u);
-  residual_angle_ = tf_.zero() ? 0.0 : angle_between(tf_.actual(c_).axis, n.v.axis);
+  c_ = tf_->command(n.u);
+  residual_angle_ = tf_->zero() ? 0.0 : angle_between(tf_->actual(c_).axis, n.v.axis);
   started_ = true;
 }
 
@@ -35,7 +35,7 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
     fail(
         "the tool axis turns by 180 degrees in one move; its path is undefined: add a point "
         "between");
-  const Machine& mach = tf_.machine();
+  const Machine& mach = tf_->machine();
   constexpr int kMaxPieces = 1 << 16;
   std::vector<std::pair<double, double>>& stack = stack_;
   stack.clear();
@@ -50,7 +50,7 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
       // What the correction leaves of the tool-axis error at the ends (the
       // singular position: the part only the outer axis could turn) is
       // allowed between them too.
-      const double r1 = tf_.zero() ? 0.0 : angle_between(tf_.actual(c1).axis, n1.v.axis);
+      const double r1 = tf_->zero() ? 0.0 : angle_between(tf_->actual(c1).axis, n1.v.axis);
       const double allowed_angle = atol + std::max(residual_angle_, r1);
       bool ok = true;
       for (int k2 = 0; k2 < mach.axis_count() && ok; ++k2)
@@ -60,13 +60,13 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
       for (double t : {0.25, 0.5, 0.75}) {
         if (!ok) break;
         const AxisVector u = c_ + t * (c1 - c_);
-        const ToolPose a = tf_.actual(u);
+        const ToolPose a = tf_->actual(u);
         const double s = s0 + t * (s1 - s0);
-        const Vector3d q_nom =
-            m.by_angles
-                ? tf_.nominal(tf_.axes_for_angles(m.q0 + s * (m.q1 - m.q0), nc::point_on(m.tip, s)))
-                      .axis
-                : slerp_axis(m.a0, m.a1, s);
+        const Vector3d q_nom = m.by_angles
+                                   ? tf_->nominal(tf_->axes_for_angles(m.q0 + s * (m.q1 - m.q0),
+                                                                       nc::point_on(m.tip, s)))
+                                         .axis
+                                   : slerp_axis(m.a0, m.a1, s);
         if (nc::distance_to_path(m.tip, a.tip_mm) > tol ||
             angle_between(a.axis, q_nom) > allowed_angle)
           ok = false;
@@ -121,10 +121,10 @@ void FiveAxisPost::turn_over_jump(const FiveAxisMove& m, double s0, double s1, c
     for (int k = 1; k <= n && pass; ++k) {
       const double t = static_cast<double>(k) / n, s = s0 + t * (s1 - s0);
       const AxisVector uk =
-          k == n ? n1.u : tf_.axes_for_angles(u0 + t * (n1.u - u0), nc::point_on(m.tip, s));
+          k == n ? n1.u : tf_->axes_for_angles(u0 + t * (n1.u - u0), nc::point_on(m.tip, s));
       const AxisVector ck = k == n ? c1 : command(uk);
       for (double tt : {0.25, 0.5, 0.75})
-        if (nc::distance_to_path(m.tip, tf_.actual(cprev + tt * (ck - cprev)).tip_mm) > tol)
+        if (nc::distance_to_path(m.tip, tf_->actual(cprev + tt * (ck - cprev)).tip_mm) > tol)
           pass = false;
       turn_.push_back({ck, s, true});
       cprev = ck;

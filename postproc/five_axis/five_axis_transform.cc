@@ -140,4 +140,23 @@ void append_number(std::string& out, double value, int decimals) {
   out.append(p, static_cast<size_t>(end - p));
 }
 
+ToolTransforms::ToolTransforms(const Machine& machine, std::map<int, double> offsets_mm,
+                               Build build)
+    : machine_(machine), offsets_mm_(std::move(offsets_mm)), build_(std::move(build)) {}
+
+const FiveAxisTransform& ToolTransforms::get(int tool) {
+  auto& slot = built_[tool];
+  if (slot) return *slot;
+  Machine m = machine_;
+  if (tool >= 0) {
+    const auto it = offsets_mm_.find(tool);
+    if (it == offsets_mm_.end())
+      throw std::invalid_argument("tool T" + std::to_string(tool) + " is not in the tool table");
+    if (std::isnan(m.measurement_tool_length_mm)) m.measurement_tool_length_mm = m.tool_length_mm;
+    m.tool_length_mm += it->second;
+  }
+  slot = build_(m);
+  return *slot;
+}
+
 }  // namespace volmap::post

@@ -10,6 +10,8 @@
 #pragma once
 
 #include <array>
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -82,6 +84,28 @@ class FiveAxisTransform {
   std::unique_ptr<ErrorModel> model_;
   std::unique_ptr<CorrectionSolver> solver_;
   bool zero_ = false;
+};
+
+/// The transforms of a program's tools, each built when first used: the
+/// machine file's tool (number -1) and the tools of a tool table, whose
+/// length is the machine file's tool's plus the table's offset (mm; a
+/// LinuxCNC .tbl Z, as the three-axis post reads it). The errors stay those
+/// measured with the machine file's tool (Machine::measurement_tool_length_mm).
+class ToolTransforms {
+ public:
+  using Build = std::function<std::unique_ptr<FiveAxisTransform>(const Machine&)>;
+  ToolTransforms(const Machine& machine, std::map<int, double> offsets_mm, Build build);
+  /// Tool `tool`'s transform (-1: the machine file's tool). Throws
+  /// std::invalid_argument when the table has no such tool.
+  const FiveAxisTransform& get(int tool);
+  /// Whether a tool table was given.
+  bool has_table() const { return !offsets_mm_.empty(); }
+
+ private:
+  Machine machine_;
+  std::map<int, double> offsets_mm_;
+  Build build_;
+  std::map<int, std::unique_ptr<FiveAxisTransform>> built_;
 };
 
 /// Appends value rounded to `decimals` (value x 10^decimals to the nearest

@@ -63,13 +63,44 @@ class Accumulator {
 class Verifier {
  public:
   Verifier(const Machine& machine, const ErrorSet& errors, const FiveAxisVerifyOptions& o)
-      : o_(o), tf_(machine, errors, o.outside), nominal_tf_(machine, ErrorSet{}, o.outside) {}
+      : o_(o),
+        actual_tools_(machine, o.tool_offsets_mm,
+                      [&errors, &o](const Machine& m) {
+                        return std::make_unique<FiveAxisTransform>(m, errors, o.outside);
+                      }),
+        nominal_tools_(machine, o.tool_offsets_mm,
+                       [&o](const Machine& m) {
+                         return std::make_unique<FiveAxisTransform>(m, ErrorSet{}, o.outside);
+                       }),
+        tf_(&actual_tools_.get(-1)),
+        nominal_tf_(&nominal_tools_.get(-1)) {}
+
+  // A tool change in `file` at `line` (the post's rule: without a tool
+  // table, a second tool after moves is refused). `moved`: moves before it.
+  void use_tool(int tool, bool moved, const std::string& file, int line) {
+    if (!actual_tools_.has_table()) {
+      if (moved && tool_ >= 0 && tool != tool_)
+        throw InputError(file, line,
+                         fmt::format("a second tool (T{} after T{}): give --tool-table with the "
+                                     "program's tools",
+                                     tool, tool_));
+      tool_ = tool;
+      return;
+    }
+    try {
+      tf_ = &actual_tools_.get(tool);
+      nominal_tf_ = &nominal_tools_.get(tool);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file, line, std::string(e.what()) + "; add it to the tool table");
+    }
+    tool_ = tool;
+  }
 
   // Nominal tool axis of move k at parameter s.
   Vector3d axis_at(const FiveAxisMove& m, double s) const {
     if (!m.by_angles) return slerp_axis(m.a0, m.a1, s);
     const AxisVector q = m.q0 + s * (m.q1 - m.q0);
-    return nominal_tf_.nominal(q).axis;
+    return nominal_tf_->nominal(q).axis;
   }
 
   // Smallest angle between `axis` and the nominal tool axis along the move
@@ -134,17 +165,19 @@ class Verifier {
   }
 
   const FiveAxisVerifyOptions& o_;
-  FiveAxisTransform tf_;
-  FiveAxisTransform nominal_tf_;
+  ToolTransforms actual_tools_, nominal_tools_;
+  const FiveAxisTransform* tf_;          ///< the tool in the spindle's, with the errors
+  const FiveAxisTransform* nominal_tf_;  ///< and without
+  int tool_ = -1;
 };
 
 // Before: the nominal program under ideal TCP interpolation; its feed moves
 // into *moves.
-FiveAxisDeviation nominal_deviation(const Verifier& v, std::istream& nominal,
+FiveAxisDeviation nominal_deviation(Verifier& v, std::istream& nominal,
                                     const std::string& nominal_name, const Machine& machine,
                                     const FiveAxisVerifyOptions& options,
                                     std::vector<NominalMove>& moves) {
-  const Machine& mach = v.tf_.machine();
+  const Machine& mach = v.tf_->machine();
   FiveAxisReader reader(nominal, nominal_name, machine, options.form, options.initial);
   Accumulator acc;
   double path_mm = 0.0;  // tip travel of the feed moves so far
@@ -153,14 +186,17 @@ FiveAxisDeviation nominal_deviation(const Verifier& v, std::istream& nominal,
     for (int k = 0; k < mach.axis_count(); ++k)
       if (is_rotary(mach.axis_order[static_cast<size_t>(k)])) prev[k] = options.initial.q[k];
   FiveAxisLine l;
+  bool moved = false;
   while (reader.next(l)) {
+    if (l.tool >= 0) v.use_tool(l.tool, moved, nominal_name, l.line);
     if (!l.has_move) continue;
+    moved = true;
     const FiveAxisMove& m = l.move;
     auto nominal_u = [&](double s) {
       const Vector3d p = nc::point_on(m.tip, s);
-      if (m.by_angles) return v.nominal_tf_.axes_for_angles(m.q0 + s * (m.q1 - m.q0), p);
+      if (m.by_angles) return v.nominal_tf_->axes_for_angles(m.q0 + s * (m.q1 - m.q0), p);
       ToolPose pose{p, slerp_axis(m.a0, m.a1, s)};
-      return v.nominal_tf_.axes_for_pose(pose, prev);
+      return v.nominal_tf_->axes_for_pose(pose, prev);
     };
     try {
       if (m.rapid) {
@@ -174,7 +210,7 @@ FiveAxisDeviation nominal_deviation(const Verifier& v, std::istream& nominal,
       for (int i = 1; i <= count; ++i) {
         const AxisVector u = nominal_u(static_cast<double>(i) / count);
         prev = u;
-        const ToolPose a = v.tf_.actual(u);
+        const ToolPose a = v.tf_->actual(u);
         const auto [d, ang] = v.deviation(n, a);
         acc.add(path_mm + n.length_mm * i / count, d, ang, l.line);
       }
@@ -191,10 +227,10 @@ FiveAxisDeviation nominal_deviation(const Verifier& v, std::istream& nominal,
 
 // After: the compensated program's axes, interpolated linearly, against the
 // nominal feed moves.
-FiveAxisDeviation compensated_deviation(const Verifier& v, std::istream& compensated,
+FiveAxisDeviation compensated_deviation(Verifier& v, std::istream& compensated,
                                         const std::string& compensated_name, const Machine& machine,
                                         const std::vector<NominalMove>& moves) {
-  const Machine& mach = v.tf_.machine();
+  const Machine& mach = v.tf_->machine();
   FiveAxisReader reader(compensated, compensated_name, machine, InputForm::kMachineAxes,
                         InitialPose{});
   Accumulator acc;
@@ -203,8 +239,11 @@ FiveAxisDeviation compensated_deviation(const Verifier& v, std::istream& compens
   bool known = false;
   size_t cursor = 0;
   FiveAxisLine l;
+  bool moved = false;
   while (reader.next(l)) {
+    if (l.tool >= 0) v.use_tool(l.tool, moved, compensated_name, l.line);
     if (!l.has_move) continue;
+    moved = true;
     const FiveAxisMove& m = l.move;
     AxisVector u1 = m.q1;
     for (int k = 0, lin = 0; k < mach.axis_count(); ++k)
@@ -215,7 +254,7 @@ FiveAxisDeviation compensated_deviation(const Verifier& v, std::istream& compens
       continue;
     }
     try {
-      const ToolPose p0 = v.tf_.actual(u_prev), p1 = v.tf_.actual(u1);
+      const ToolPose p0 = v.tf_->actual(u_prev), p1 = v.tf_->actual(u1);
       double rot = 0;
       for (int k = 0; k < mach.axis_count(); ++k)
         if (is_rotary(mach.axis_order[static_cast<size_t>(k)]))
@@ -224,7 +263,7 @@ FiveAxisDeviation compensated_deviation(const Verifier& v, std::istream& compens
       const int count = v.samples_for(chord_mm, rot);
       for (int i = 1; i <= count; ++i) {
         const AxisVector u = u_prev + (static_cast<double>(i) / count) * (u1 - u_prev);
-        const ToolPose a = v.tf_.actual(u);
+        const ToolPose a = v.tf_->actual(u);
         // Nearest nominal feed move around the cursor.
         const auto [best, best_ang] = v.deviation_near_cursor(moves, a, cursor);
         acc.add(path_mm + chord_mm * i / count, best, best_ang, l.line);

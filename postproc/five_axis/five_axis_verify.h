@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <map>
 #include <string>
 
 #include "core/model/error_model.h"
@@ -43,6 +44,8 @@ struct FiveAxisVerifyOptions {
   double sample_step_mm = 0.25;
   InitialPose initial;
   OutsidePolicy outside = OutsidePolicy::kError;
+  /// The tool table (FiveAxisPostOptions::tool_offsets_mm).
+  std::map<int, double> tool_offsets_mm;
 };
 
 /// `machine`: the part origin already placed.

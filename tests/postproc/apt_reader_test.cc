@@ -9,6 +9,7 @@
 #include "core/common/input_error.h"
 #include "gcode/nc_path.h"
 #include "postproc/five_axis/five_axis_input.h"
+#include "postproc/five_axis/five_axis_post.h"
 #include "tests/support/samples.h"
 
 namespace volmap {
@@ -280,9 +281,14 @@ TEST(AptReader, FramesAreReadOrRefused) {
                          "RAPID/\nGOTO/-52.36,15.63,25.45,.005061,0,.999987\n"),
             "");
   EXPECT_NE(refusal(sw + "CSYS/0,.999987,.005061,0,-1.,0,0,0,0,-0.005061,.999987,0\n"
-                         "RAPID/\nGOTO/-52.36,15.63,25.45\n")
+                         "RAPID/\nGOTO/-52.36,15.63,25.45,0,0,1\n")
                 .find("t.apt:5: the tool axis differs from the third column of the CSYS/"),
             std::string::npos);
+  // A GOTO without i,j,k takes the setup's axis (SOLIDWORKS CAM writes them
+  // only where it is not +Z).
+  const Read r = read_apt(sw + "CSYS/-1.,0,0,0,0,1.,0,0,0,0,-1.,0\nRAPID/\nGOTO/1,2,3\n");
+  ASSERT_EQ(r.moves.size(), 1u);
+  expect_near(r.moves[0].a1, Vector3d(0, 0, -1));
   // Elsewhere only the identity is read.
   EXPECT_EQ(refusal("CSYS/1,0,0,0,0,1,0,0,0,0,1,0\n"), "");
   EXPECT_NE(refusal("CSYS/1,0,0,5,0,1,0,0,0,0,1,0\n").find("t.apt:1: CSYS/ that is not"),
@@ -300,9 +306,10 @@ TEST(AptReader, ToolsSpindleCoolantAndCutcom) {
   EXPECT_NE(r.text.find("S3500 M4\nM8\n"), std::string::npos) << r.text;
   EXPECT_NE(r.text.find("tool centre: no G41/G42"), std::string::npos);
   EXPECT_NE(r.text.find("M5\nM9\nM1\nM0\nG4 P2.5\n"), std::string::npos) << r.text;
-  // A second tool after moves: the machine file's tool length is one.
-  EXPECT_NE(refusal("LOADTL/1\nRAPID\nGOTO/0,0,5\nLOADTL/2\n").find("t.apt:4: a second tool"),
-            std::string::npos);
+  // Tool changes are marked for the post (which knows the tool table).
+  int changes = 0;
+  for (const auto& l : r.lines) changes += l.tool == 3 ? 1 : 0;
+  EXPECT_EQ(changes, 2);
   EXPECT_NE(refusal("SPINDL/200,SMM\n").find("surface speed"), std::string::npos);
   // Creo with contour points: CUTCOM expects the controller to offset.
   EXPECT_NE(refusal("$$-> CUTCOM_GEOMETRY_TYPE / OUTPUT_ON_PROFILE\nCUTCOM/LEFT\n")
@@ -336,6 +343,50 @@ TEST(AptReader, UnknownRecordsAreRefusedNeverComments) {
   // Bytes outside printable ASCII are shown escaped, on one line.
   const std::string why = refusal("GOTO/1,\x01\xff,3\n");
   EXPECT_NE(why.find("\\x01\\xFF"), std::string::npos) << why;
+}
+
+// The post of a CL file with two tools: without a tool table refused at the
+// second; with one, each tool's length: the same tip 10 mm lower in tool 2's
+// terms is Z 10 mm higher (the tool along Z at A = 0), and T2 M6 written.
+TEST(AptPost, ToolLengthsFromTheToolTable) {
+  const Machine m = test::sample_machine("lei-hsu-xyzac");
+  const std::string apt = "LOADTL/1\nRAPID\nGOTO/0,0,50\nLOADTL/2\nRAPID\nGOTO/0,0,50\nFINI\n";
+  auto post = [&](const std::map<int, double>& table, std::string& text) {
+    post::FiveAxisPostOptions o;
+    o.form = post::InputForm::kApt;
+    o.tool_offsets_mm = table;
+    std::istringstream in(apt);
+    std::ostringstream out;
+    post::post_five_axis(in, "t.apt", out, m, ErrorSet{}, o);
+    text = out.str();
+  };
+  std::string text;
+  try {
+    post({}, text);
+    ADD_FAILURE() << "posted without a tool table";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("t.apt:4: a second tool (T2 after T1)", 0), 0u)
+        << e.what();
+  }
+  post({{1, 0.0}, {2, 10.0}}, text);
+  std::vector<double> z;
+  std::istringstream lines(text);
+  std::string l;
+  while (std::getline(lines, l))
+    if (l.rfind("G0 ", 0) == 0 || l.rfind("X", 0) == 0)
+      z.push_back(std::stod(l.substr(l.find('Z') + 1)));
+  ASSERT_EQ(z.size(), 2u) << text;
+  EXPECT_NEAR(z[1] - z[0], 10.0, 1e-4);
+  EXPECT_NE(text.find("T2 M6 (APT: LOADTL/2)"), std::string::npos) << text;
+  // A tool the table does not have; a feed move right after the change.
+  EXPECT_THROW(post({{1, 0.0}}, text), InputError);
+  const std::string feed_after = "FEDRAT/100\nLOADTL/1\nGOTO/0,0,50\nLOADTL/2\nGOTO/0,0,40\n";
+  post::FiveAxisPostOptions o;
+  o.form = post::InputForm::kApt;
+  o.tool_offsets_mm = {{1, 0.0}, {2, 10.0}};
+  std::istringstream in(feed_after);
+  std::ostringstream out;
+  EXPECT_THROW(post::post_five_axis(in, "t.apt", out, m, ErrorSet{}, o), InputError);
 }
 
 }  // namespace

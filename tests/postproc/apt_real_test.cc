@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <sstream>
 
 #include "core/common/input_error.h"
 #include "postproc/five_axis/five_axis_input.h"
@@ -45,10 +46,10 @@ const std::map<std::string, std::string> kOutcome = {
     {"nx-sverl-63-n2.cls", ""},
     {"nx-toretc-250-bok.cls", ""},
     {"nx-ust-a-variable-contour.cls", ""},
-    {"solidworkscam-manufacture3-top.apt", "156: a second tool"},
-    {"solidworkscam-sacrifice-board.apt", "27: a second tool"},
-    {"solidworkscam-shimemcunha.apt", "32: a second tool"},
-    {"solidworkscam-suppetriled.apt", "27: a second tool"},
+    {"solidworkscam-manufacture3-top.apt", ""},
+    {"solidworkscam-sacrifice-board.apt", ""},
+    {"solidworkscam-shimemcunha.apt", ""},
+    {"solidworkscam-suppetriled.apt", ""},
     {"solidworkscam-teste-metrologia.apt", ""},
 };
 
@@ -125,21 +126,26 @@ TEST(AptRealFiles, ArcsTurnTheWayTheToolEntersThem) {
 }
 
 // The GOTO end points of a CL file's feed moves, read by a few lines of
-// code here (not volmap's reader), in mm.
+// code here (not volmap's reader), in mm; in a SOLIDWORKS CAM cycle (tool
+// axis +Z) the bottom of each hole, FEDTO below its GOTO.
 std::vector<Eigen::Vector3d> feed_goto_points(const std::string& name, double unit_mm) {
   std::ifstream in(kDir / name);
   std::string line;
   std::vector<Eigen::Vector3d> out;
   bool rapid = false;
+  double depth = -1;  // in a cycle: FEDTO
   while (std::getline(in, line)) {
     std::string t;
     for (char c : line)
       if (c != ' ' && c != '\r') t += c;
     if (t.rfind("RAPID", 0) == 0) rapid = true;
+    if (t.rfind("CYCLE/OFF", 0) == 0) depth = -1;
+    if (const size_t f = t.find("FEDTO,"); t.rfind("CYCLE/", 0) == 0 && f != std::string::npos)
+      depth = std::strtod(t.c_str() + f + 6, nullptr);
     if (t.rfind("GOTO/", 0) != 0) continue;
     double x = 0, y = 0, z = 0;
     if (std::sscanf(t.c_str() + 5, "%lf,%lf,%lf", &x, &y, &z) == 3 && !rapid)
-      out.emplace_back(x * unit_mm, y * unit_mm, z * unit_mm);
+      out.emplace_back(x * unit_mm, y * unit_mm, (z - std::max(depth, 0.0)) * unit_mm);
     rapid = false;
   }
   return out;
@@ -149,6 +155,7 @@ struct PostCase {
   const char* name;
   double unit_mm;       ///< the file's length unit
   double tolerance_um;  ///< --tolerance-um
+  const char* tools;    ///< a tool table with these tools, all of the machine file's length
 };
 
 class AptRealPost : public ::testing::TestWithParam<PostCase> {};
@@ -164,15 +171,26 @@ TEST_P(AptRealPost, Rs274AcceptsAndTheToolFollowsTheClPath) {
   const std::string out = ::testing::TempDir() + "volmap_apt_" + name + ".ngc";
   const std::string canon = out + ".canon";
   fs::remove(out);
+  // The tools of a CL file with several (rs274 needs them in its table too).
+  std::string table_option, rs274_table;
+  if (*GetParam().tools) {
+    const std::string table = out + ".tbl";
+    std::ofstream t(table);
+    std::stringstream tools(GetParam().tools);
+    for (std::string n; std::getline(tools, n, ',');) t << "T" << n << " P" << n << " Z0\n";
+    table_option = " --tool-table " + table;
+    rs274_table = "-t " + table + " ";
+  }
   const test::CliResult post = test::run_volmap(
       "post --machine " + test::source_path("samples/machines/lei-hsu-xyzac.json") + " --errors " +
-      test::source_path("samples/errors/lei-hsu-xyzac.csv") + " " + (kDir / name).string() +
-      " --tolerance-um " + std::to_string(GetParam().tolerance_um) + " -o " + out);
+      test::source_path("samples/errors/lei-hsu-xyzac.csv") + table_option + " " +
+      (kDir / name).string() + " --tolerance-um " + std::to_string(GetParam().tolerance_um) +
+      " -o " + out);
   ASSERT_EQ(post.status, 0) << post.err;
-  ASSERT_EQ(
-      std::system(
-          (test::rs274_command("-g " + out + " " + canon) + " >" + canon + ".log 2>&1").c_str()),
-      0);
+  ASSERT_EQ(std::system((test::rs274_command(rs274_table + "-g " + out + " " + canon) + " >" +
+                         canon + ".log 2>&1")
+                            .c_str()),
+            0);
   std::string rs_errors;
   const std::vector<test::Pose5> feeds = test::canonical_feeds(canon, rs_errors);
   EXPECT_EQ(rs_errors, "");
@@ -207,17 +225,19 @@ TEST_P(AptRealPost, Rs274AcceptsAndTheToolFollowsTheClPath) {
 
 // nx-mech491's tool axis passes 0.34 degrees from the C axis (the singular
 // position) at line 224: there 1 um would take more than 65536 pieces.
-INSTANTIATE_TEST_SUITE_P(CamSystems, AptRealPost,
-                         ::testing::Values(PostCase{"creo8-profilfraesen2.ncl.1", 1.0, 1},
-                                           PostCase{"nx-cutcom.clsf", 1.0, 1},
-                                           PostCase{"nx-mech491-variable-axis.txt", 25.4, 5},
-                                           PostCase{"solidworkscam-teste-metrologia.apt", 1.0, 1}),
-                         [](const auto& info) {
-                           std::string n = info.param.name;
-                           for (char& c : n)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    CamSystems, AptRealPost,
+    ::testing::Values(PostCase{"creo8-profilfraesen2.ncl.1", 1.0, 1, ""},
+                      PostCase{"nx-cutcom.clsf", 1.0, 1, ""},
+                      PostCase{"nx-mech491-variable-axis.txt", 25.4, 5, ""},
+                      PostCase{"solidworkscam-suppetriled.apt", 1.0, 1, "1,16,17"},
+                      PostCase{"solidworkscam-teste-metrologia.apt", 1.0, 1, ""}),
+    [](const auto& info) {
+      std::string n = info.param.name;
+      for (char& c : n)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return n;
+    });
 
 }  // namespace
 }  // namespace volmap
