@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include "core/common/input_error.h"
@@ -184,7 +185,12 @@ size_t skip_comment(std::string_view text, int line, const std::string& file, si
     fail(file, line, i,
          "O-word control flow (subroutines, loops, conditionals) is not supported; "
          "expand it in CAM to a flat program");
-  fail(file, line, i, std::string("unexpected character '") + c + "'; not a G-code word");
+  // Shown as it is when printable ASCII, else as \xNN: a message is one
+  // line of text.
+  const auto u = static_cast<unsigned char>(c);
+  char shown[8];
+  std::snprintf(shown, sizeof shown, u >= 0x20 && u < 0x7f ? "%c" : "\\x%02X", u);
+  fail(file, line, i, std::string("unexpected character '") + shown + "'; not a G-code word");
 }
 
 // The value of a number of `mantissa` over 10^decimals (`exact`: at most 15

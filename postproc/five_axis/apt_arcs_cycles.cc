@@ -16,6 +16,8 @@ namespace {
 
 // LinuxCNC's G83 clearance above the depth of the last peck (0.010 inch).
 constexpr double kPeckClearanceMm = 0.254;
+// Bounds on what one record may expand to.
+constexpr int kMaxChords = 100000, kMaxPecks = 10000;
 
 // v turned about the unit axis n by angle a (right hand).
 Eigen::Vector3d rotate(const Eigen::Vector3d& v, const Eigen::Vector3d& n, double a) {
@@ -111,7 +113,13 @@ void AptReader::arc_to(const Eigen::Vector3d& end_mm, const Eigen::Vector3d& axi
   // About a tilted axis: chords within chord_mm_ of the arc.
   const double r = std::max(r0, r1);
   const double step = r > chord_mm_ ? 2.0 * std::acos(1.0 - chord_mm_ / r) : M_PI / 2;
-  const int count = std::max(2, static_cast<int>(std::ceil(sweep / step)));
+  const double chords = std::ceil(sweep / step);
+  if (!(chords <= kMaxChords))
+    fail(
+        fmt::format("the arc of CIRCLE/ (line {}), {:.4g} mm about a tilted axis, would take more "
+                    "than {} chords within {:g} um; output it as GOTO points",
+                    c.line, r, kMaxChords, chord_mm_ * 1e3));
+  const int count = std::max(2, static_cast<int>(chords));
   const Eigen::Vector3d base = c.centre_mm + (s - c.centre_mm).dot(n) * n;
   const double rise = (e - s).dot(n);
   for (int i = 1; i <= count; ++i) {
@@ -210,6 +218,8 @@ void AptReader::cycle_record(const AptRecord& r, std::deque<FiveAxisLine>& out) 
   if (pecks && !(cy.first_peck_mm > 0 && cy.peck_mm > 0))
     fail(fmt::format("CYCLE/{} needs its peck depths (INCR, or 1STPECK and SUBPECK)", type));
   if (!pecks) cy.first_peck_mm = cy.peck_mm = 0;
+  if (pecks && !(std::abs(*fedto) * unit_mm_ / std::min(cy.first_peck_mm, cy.peck_mm) <= kMaxPecks))
+    fail(fmt::format("CYCLE/{}: more than {} pecks per hole", type, kMaxPecks));
   cy.depth_mm = cycle_depth(*fedto) * unit_mm_;
   cy.rapto_mm = *rapto * unit_mm_;
   cy.retract_mm = rtrcto ? *rtrcto * unit_mm_ : cy.rapto_mm;

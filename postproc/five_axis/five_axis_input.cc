@@ -15,6 +15,8 @@
 namespace volmap::post {
 namespace {
 
+constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
+
 std::string trim(const std::string& s) {
   size_t b = 0, e = s.size();
   while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
@@ -90,14 +92,17 @@ namespace {
 
 // kAuto: the form of the first 2000 lines, which stay in `buffered`.
 InputForm resolve_form(std::istream& in, InputForm form, std::deque<std::string>& buffered) {
-  if (form != InputForm::kAuto && form != InputForm::kApt) return form;
   std::vector<std::string> first;
   std::string l;
   while (first.size() < 2000 && std::getline(in, l)) {
     first.push_back(l);
     buffered.push_back(l + (in.eof() ? "" : "\n"));
   }
-  return form == InputForm::kApt ? form : detect_input_form(first);
+  // A UTF-8 byte-order mark is not part of the program (FiveAxisReader
+  // takes it off the first line).
+  if (!first.empty() && first.front().rfind(kByteOrderMark, 0) == 0)
+    first.front().erase(0, kByteOrderMark.size());
+  return form == InputForm::kAuto ? detect_input_form(first) : form;
 }
 
 // APT without UNITS/ before its first FEDRAT/ (NX CLSF): the units of that
@@ -156,6 +161,11 @@ FiveAxisReader::FiveAxisReader(std::istream& in, std::string file, const Machine
       machine_(machine),
       form_(resolve_form(in, form, buffered_)),
       interp_(gcode_setup(machine, form_, initial), file_) {
+  if (!buffered_.empty() && buffered_.front().rfind(kByteOrderMark, 0) == 0) {
+    byte_order_mark_ = true;
+    buffered_.front().erase(0, kByteOrderMark.size());
+  }
+  if (form_ != InputForm::kApt) scan_tape();
   if (form_ == InputForm::kApt) {
     apt_ =
         std::make_unique<AptReader>(file_, initial_angles(machine, initial), initial, arc_chord_mm);
@@ -200,7 +210,7 @@ bool FiveAxisReader::next(FiveAxisLine& out) {
   if (!read_raw(text)) return false;
   out = FiveAxisLine{};
   out.line = line_;
-  gcode_line(text, out);
+  if (!frame_line(text, out)) gcode_line(text, out);
   out.unit_mm = interp_.state().unit_mm;
   return true;
 }

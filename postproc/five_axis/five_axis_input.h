@@ -118,6 +118,9 @@ class FiveAxisReader {
   /// APT statement's lines but its last always do.
   bool newline() const { return newline_ || !pending_.empty(); }
   const std::string& line_ending() const { return line_ending_; }
+  /// The file began with a UTF-8 byte-order mark (taken off, written back
+  /// by the post).
+  bool byte_order_mark() const { return byte_order_mark_; }
 
  private:
   bool read_raw(std::string& text);
@@ -134,6 +137,14 @@ class FiveAxisReader {
   /// state before it and what it did.
   void gcode_move(const GcodeWords& words, const nc::State& before, const nc::BlockEffect& effect,
                   FiveAxisLine& out) const;
+  // The tape frame and TCP switches of the G-code forms
+  // (five_axis_input_gcode.cc).
+  /// Leader lines and whether the program switches TCP on, from the
+  /// buffered first lines.
+  void scan_tape();
+  /// A line written as it is and not run: leader, '%', after the closing
+  /// '%', a program number; Siemens TRAORI/TRAFOOF lines (a comment).
+  bool frame_line(const std::string& text, FiveAxisLine& out);
   /// The next APT statement's lines into pending_; false at the end.
   bool apt_statement();
   [[noreturn]] void fail(int column, const std::string& msg) const;
@@ -146,6 +157,14 @@ class FiveAxisReader {
   int line_ = 0;
   bool newline_ = true;
   std::string line_ending_ = "\n";
+  bool byte_order_mark_ = false;
+  int leader_lines_ = 0;
+  bool tape_opened_ = false, tape_closed_ = false;
+  /// The program switches TCP on (M428, G43.4, G43.5, G234, M128, TRAORI):
+  /// its moves outside the switched-on part are not tool-tip moves.
+  bool tcp_program_ = false, tcp_on_ = false;
+  bool tcp_by_g_code_ = false;  ///< switched on by G43.4/G43.5/G234: G49 ends it
+  bool moved_ = false;
 
   // The G-code forms' modal state: the interpreter's (program coordinates,
   // no work offsets).

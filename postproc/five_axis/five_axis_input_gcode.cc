@@ -6,6 +6,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <regex>
 
 #include "core/common/units.h"
 #include "gcode/g_codes.h"
@@ -31,12 +32,91 @@ bool replace_siemens_vector(std::string& text) {
   return any;
 }
 
+// TCP codes of other controllers (x10, as nc::Word::code10).
+constexpr int kG43_4Tcp = 434, kG43_5Tcp = 435, kG234Tcp = 2340;
+constexpr int kM128Tcp = 1280, kM129TcpOff = 1290;
+
+// The code of a line, upper case, without comments ((...) and ';').
+std::string code_of(const std::string& line) {
+  std::string out;
+  int depth = 0;
+  for (char c : line) {
+    if (c == ';' && depth == 0) break;
+    if (c == '(')
+      ++depth;
+    else if (c == ')')
+      depth = std::max(0, depth - 1);
+    else if (depth == 0 && c != '\r' && c != '\n')
+      out += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  }
+  const size_t b = out.find_first_not_of(" \t"), e = out.find_last_not_of(" \t");
+  return b == std::string::npos ? std::string() : out.substr(b, e - b + 1);
+}
+
 }  // namespace
+
+void FiveAxisReader::scan_tape() {
+  // Tape leader: text before a first '%' that is not the first line.
+  int n = 0;
+  bool text_before = false;
+  for (const std::string& raw : buffered_) {
+    ++n;
+    const std::string t = code_of(raw);
+    if (!t.empty() && t[0] == '%') {
+      if (text_before) leader_lines_ = n - 1;
+      break;
+    }
+    if (raw.find_first_not_of(" \t\r\n") != std::string::npos) text_before = true;
+  }
+  static const std::regex kTcpOn(
+      R"((^|[^A-Z0-9.])(M0*428|G0*43\.[45]|G0*234|M0*128|TRAORI)(?![0-9.]))");
+  for (const std::string& raw : buffered_)
+    if (std::regex_search(code_of(raw), kTcpOn)) {
+      tcp_program_ = true;
+      break;
+    }
+}
+
+bool FiveAxisReader::frame_line(const std::string& text, FiveAxisLine& out) {
+  const std::string t = code_of(text);
+  auto verbatim = [&] {
+    out.synthetic = true;
+    out.text = text;
+    return true;
+  };
+  if (line_ <= leader_lines_ || tape_closed_) return verbatim();
+  if (!t.empty() && t[0] == '%') {
+    tape_closed_ = tape_opened_;
+    tape_opened_ = true;
+    return verbatim();
+  }
+  static const std::regex kProgramNumber(R"(O\s*[0-9]+)");
+  if (!moved_ && std::regex_match(t, kProgramNumber)) return verbatim();  // Fanuc, LinuxCNC
+  if (!t.empty() && t[0] == ':')
+    fail(1, "a ':' program number (Fanuc tape) is not read; write it as O<number>");
+  // Siemens: TRAORI / TRAFOOF switch the transformation (TCP) on and off.
+  static const std::regex kSiemens(R"((N[0-9]+\s*)?(TRAORI\s*(\(\s*[0-9]*\s*\))?|TRAFOOF))");
+  std::smatch m;
+  if (std::regex_match(t, m, kSiemens)) {
+    tcp_on_ = m[2].str().rfind("TRAORI", 0) == 0;
+    out.synthetic = true;
+    out.text = "(volmap post: " + m[2].str() + " removed: the output commands the machine axes)";
+    return true;
+  }
+  if (t.find("CYCLE800") != std::string::npos)
+    fail(1,
+         "CYCLE800 (a swivelled work plane, 3+2) is not supported; output the tool path in "
+         "the workpiece frame with TRAORI, or post each plane's part separately");
+  return false;
+}
 
 /// The words of a G-code line (read_gcode_words).
 struct FiveAxisReader::GcodeWords {
   int motion_word = -1;
   bool g93 = false, g94 = false, dwell = false;
+  bool tcp_on = false, tcp_off = false;  ///< a TCP switch in the block
+  bool tcp_on_g = false;                 ///< by a G code (G49 ends it)
+  int h_word = -1;                       ///< index of an H word
   std::array<const nc::Word*, 26> word{};
   const nc::Word* operator[](char L) const { return word[static_cast<size_t>(L - 'A')]; }
 };
@@ -54,6 +134,17 @@ void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
   if (const nc::Word* f = words['F']; f && f->value <= 0)
     fail(static_cast<int>(f->begin) + 1, "the feed rate must be positive; correct F");
   check_gcode_motion(b, words);
+  // H belongs to the TCP code it came with (G43.4 H1, G234 H1): the tool is
+  // the machine file's (or the tool table's T).
+  if (words.h_word >= 0) {
+    if (!words.tcp_on)
+      fail(static_cast<int>(b.words[static_cast<size_t>(words.h_word)].begin) + 1,
+           "word H is not supported by the five-axis post");
+    out.strip.push_back(words.h_word);
+    std::sort(out.strip.begin(), out.strip.end());
+  }
+  if (words.tcp_on) tcp_on_ = true, tcp_by_g_code_ = words.tcp_on_g;
+  if (words.tcp_off) tcp_on_ = false;
   // The interpreter runs the block without the kinematics switches.
   nc::Block stripped;
   if (!out.strip.empty()) {
@@ -67,6 +158,12 @@ void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
   out.motion_code = words.motion_word;
   if (interp_.state().tool != before.tool) out.tool = interp_.state().tool;  // M6
   gcode_move(words, before, effect, out);
+  if (out.has_move && tcp_program_ && !tcp_on_ && form_ != InputForm::kMachineAxes)
+    fail(1,
+         "a move outside the program's TCP part (before its TCP code, M428 G43.4 G234 M128 "
+         "TRAORI, or after it is switched off): its axis words are not the tool tip; move it "
+         "into the TCP part or remove it");
+  moved_ = moved_ || out.has_move;
 }
 
 void FiveAxisReader::read_gcode_words(const nc::Block& b, FiveAxisLine& out,
@@ -76,13 +173,26 @@ void FiveAxisReader::read_gcode_words(const nc::Block& b, FiveAxisLine& out,
     const nc::Word& w = b.words[k];
     const int col = static_cast<int>(w.begin) + 1;
     if (w.letter == 'G') {
+      // TCP on (Fanuc G43.4, G43.5; Haas G234): read like LinuxCNC's M428.
+      if (w.code10 == kG43_4Tcp || w.code10 == kG43_5Tcp || w.code10 == kG234Tcp) {
+        out.strip.push_back(static_cast<int>(k));
+        words.tcp_on = words.tcp_on_g = true;
+        continue;
+      }
+      if (w.code10 == nc::kG49ToolLengthCancel && tcp_on_ && tcp_by_g_code_) words.tcp_off = true;
       gcode_g_word(w, col, words);
+      continue;
+    }
+    if (w.letter == 'H') {
+      words.h_word = static_cast<int>(k);
       continue;
     }
     if (w.letter == 'M') {
       if (w.code10 == nc::kM428KinematicsSwitch || w.code10 == nc::kM429KinematicsSwitch ||
-          w.code10 == nc::kM430KinematicsSwitch)
+          w.code10 == nc::kM430KinematicsSwitch || w.code10 == kM128Tcp || w.code10 == kM129TcpOff)
         out.strip.push_back(static_cast<int>(k));
+      if (w.code10 == nc::kM428KinematicsSwitch || w.code10 == kM128Tcp) words.tcp_on = true;
+      if (w.code10 == nc::kM429KinematicsSwitch || w.code10 == kM129TcpOff) words.tcp_off = true;
       if (w.code10 == nc::kM2ProgramEnd || w.code10 == nc::kM30ProgramEndRewind)
         out.ends_program = true;
       continue;
@@ -157,6 +267,15 @@ void FiveAxisReader::gcode_g_word(const nc::Word& w, int col, GcodeWords& words)
            "tool length compensation (G43) is not supported by the five-axis post: the machine "
            "file's tool is the tool; give its length there");
     default:
+      if (w.code10 == 682 || w.code10 == 683 || w.code10 == 684 || w.code10 == 690)
+        fail(col,
+             "tilted work planes (3+2: G68.2, G68.3, G68.4, G69) are not supported; output the "
+             "tool path in the workpiece frame with TCP (G43.4) or post each plane's part "
+             "separately");
+      if (w.code10 == 2540 || w.code10 == 2550)
+        fail(col,
+             "Haas's dynamic work offset (G254, G255) is not supported: the program origin is "
+             "one point on the table (`part_origin`)");
       if (w.code10 >= nc::kG55WorkOffset2 && w.code10 <= nc::kG59_3WorkOffset9)
         fail(col,
              "only G54 is accepted: the program origin is one point on the table "

@@ -145,9 +145,8 @@ void FiveAxisPost::write_line_without_move(const FiveAxisLine& l, bool lower) {
   // The output states absolute machine positions: G91 becomes G90.
   if (g91) edit.insert = lower ? "g90" : "G90";
   if (!l.strip.empty())
-    edit.insert +=
-        std::string(edit.insert.empty() ? "" : " ") +
-        "(volmap post: LinuxCNC kinematics switch removed, the output commands machine axes)";
+    edit.insert += std::string(edit.insert.empty() ? "" : " ") +
+                   "(volmap post: TCP switch removed, the output commands machine axes)";
   if (edit.remove.empty()) {
     emit(l.block.text, reader_newline_);
     return;
@@ -207,7 +206,7 @@ void FiveAxisPost::write_first_piece(const FiveAxisLine& l, bool lower, const st
   }
   for (int k : l.strip) edit.remove.push_back(k);
   edit.insert = g91 ? (lower ? "g90 " : "G90 ") + words : words;
-  if (!l.strip.empty()) edit.insert += " (volmap post: LinuxCNC kinematics switch removed)";
+  if (!l.strip.empty()) edit.insert += " (volmap post: TCP switch removed)";
   // The motion word was removed: the output's modal state before this
   // line is what move_text assumed.
   emit(edited(l.block, edit), newline);
@@ -273,6 +272,7 @@ void FiveAxisPost::write_line(const FiveAxisLine& l) {
 
 void FiveAxisPost::run(FiveAxisReader& reader) {
   report_.form = reader.form();
+  if (reader.byte_order_mark()) out_ << "\xEF\xBB\xBF";  // the output begins as the input did
   if (reader.form() == InputForm::kApt) {
     emit("(volmap post: five-axis machine-axis program from APT/CLDATA " + file_ + ")");
     emit("G21 G90 G17 G40 G80 G94");

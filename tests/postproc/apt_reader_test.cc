@@ -190,6 +190,10 @@ TEST(AptReader, CircleRefusals) {
             std::string::npos);
   EXPECT_NE(refusal("FEDRAT/100\nGOTO/10,0,0\nCIRCLE/0,0,0,0,0,1\n").find("t.apt:3: the CIRCLE/"),
             std::string::npos);
+  // What one record may expand to is bounded.
+  EXPECT_NE(refusal("FEDRAT/100\nGOTO/1e9,0,0\nCIRCLE/0,0,0,0,.6,.8\nGOTO/0,8e8,-6e8\n")
+                .find("t.apt:4: the arc of CIRCLE/ (line 3), 1e+09 mm about a tilted axis"),
+            std::string::npos);
 }
 
 TEST(AptReader, SolidworksDrillCycleIsWrittenOutHoleByHole) {
@@ -266,6 +270,7 @@ TEST(AptReader, CyclesItCannotWriteOutExactlyAreRefused) {
       {"CYCLE/DRILL,FEDTO,5,MMPM,100\n", "RAPTO"},
       {"CYCLE/FACE,FEDTO,5,MMPM,100,RAPTO,2\n", "not a cycle volmap writes out"},
       {"CYCLE/ON\n", "before any cycle"},
+      {"UNIT/MM\nCYCLE/DEEP,FEDTO,1000,INCR,.001,MMPM,100,RAPTO,2\n", "more than 10000 pecks"},
       // FEDTO's sign differs between NX and SOLIDWORKS CAM: unknown writer.
       {"CYCLE/DRILL,FEDTO,5,MMPM,100,RAPTO,2\nGOTO/0,0,0\n", "cannot tell"},
   };

@@ -190,7 +190,11 @@ TEST(FiveAxisPost, ModalRulesAreTheInterpretersAsLinuxCncs) {
   EXPECT_NE(refusal(start + "M250\n").find("M code is not supported"), std::string::npos);
   EXPECT_NE(refusal(start + "G2 X2 Y0 I1 J0 K0 F100\n").find("K word given for an arc"),
             std::string::npos);
-  EXPECT_EQ(refusal(start + "M428\nG1 X1 F100\nM429\n"), "");  // stripped, not interpreted
+  EXPECT_EQ(refusal("M428\n" + start + "G1 X1 F100\nM429\n"), "");  // stripped, not interpreted
+  // Before M428 the axis words are machine axes (LinuxCNC's identity
+  // kinematics), not the tool tip.
+  EXPECT_NE(refusal(start + "M428\nG1 X1 F100\nM429\n").find("test.ngc:2:1: a move outside"),
+            std::string::npos);
 }
 
 TEST(FiveAxisPost, LinesWithoutMovesPassUnchanged) {
