@@ -94,6 +94,14 @@ bool FiveAxisReader::frame_line(const std::string& text, FiveAxisLine& out) {
   if (!moved_ && std::regex_match(t, kProgramNumber)) return verbatim();  // Fanuc, LinuxCNC
   if (!t.empty() && t[0] == ':')
     fail(1, "a ':' program number (Fanuc tape) is not read; write it as O<number>");
+  if (t.size() > 1 && t[0] == 'O' && std::isalpha(static_cast<unsigned char>(t[1])))
+    fail(1, "'" + t.substr(0, 40) +
+                "' is not a program number O<number> (nor a LinuxCNC O-word); correct it in the "
+                "post-processor that wrote it");
+  if (t.rfind("DEF ", 0) == 0 || t.find(" DEF ") != std::string::npos)
+    fail(1,
+         "Siemens variable definitions (DEF) are not read: the five-axis post needs literal "
+         "numbers; output the program without variables");
   // Siemens: TRAORI / TRAFOOF switch the transformation (TCP) on and off.
   static const std::regex kSiemens(R"((N[0-9]+\s*)?(TRAORI\s*(\(\s*[0-9]*\s*\))?|TRAFOOF))");
   std::smatch m;

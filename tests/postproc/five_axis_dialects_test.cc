@@ -6,11 +6,15 @@
 // program number and a byte-order mark pass as they are.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <fstream>
 #include <sstream>
 
 #include "core/common/input_error.h"
 #include "postproc/five_axis/five_axis_post.h"
+#include "postproc/five_axis/five_axis_verify.h"
 #include "tests/support/samples.h"
+#include "tests/support/test_paths.h"
 
 namespace volmap {
 namespace {
@@ -104,6 +108,55 @@ TEST(FiveAxisDialects, TapeFramePassesAsItIs) {
             0u)
       << text;
   EXPECT_NE(text.find("M30\n%\ntext after the tape\n"), std::string::npos) << text;
+}
+
+// The sample tool-vector cone on the A-B dual-rotary table sample (its A
+// about -X carries the part, B about -Y the cradle): posted with its
+// errors, verify finds the tip tens of um off before and within the
+// tolerance after.
+TEST(FiveAxisMachines, AbDualRotaryTablePostsWithinTheTolerance) {
+  const Machine m = test::sample_machine("xyzab-tdr");
+  const ErrorSet e = test::sample_errors("xyzab-tdr");
+  std::ifstream f(test::source_path("samples/programs/cone-vector.ngc"));
+  std::stringstream program;
+  program << f.rdbuf();
+  post::FiveAxisPostOptions o;
+  std::istringstream in(program.str());
+  std::ostringstream out;
+  post::post_five_axis(in, "cone-vector.ngc", out, m, e, o);
+  EXPECT_NE(out.str().find(" B"), std::string::npos);
+  std::istringstream nominal(program.str()), compensated(out.str());
+  const post::FiveAxisVerifyResult r = post::verify_five_axis(
+      nominal, "cone-vector.ngc", compensated, "out.ngc", m, e, post::FiveAxisVerifyOptions{});
+  EXPECT_GT(r.before.max_um, 20.0);
+  EXPECT_LT(r.after.max_um, 1.0);
+  EXPECT_LT(r.after.max_urad, 50.0);
+}
+
+// Real TCP programs (tests/data/real/tcp, SOURCES.md): each refused at the
+// first line volmap cannot read exactly, with the reason; none is posted
+// into something else.
+TEST(FiveAxisDialects, RealTcpProgramsAreRefusedAtTheirLine) {
+  const std::vector<std::array<std::string, 3>> cases = {
+      {"linuxcnc-xyzab-tdr-demo.ngc", "xyzab-tdr", ":6:1: G10 is not supported"},
+      {"linuxcnc-xyzac-switchkins-test2.ngc", "lei-hsu-xyzac", ":3:1: # parameters"},
+      {"nx-haas-umc750-g234-final-toolpath.txt", "bc-table-table",
+       ":7:1: 'OFINAL TOOLPATH' is not a program number"},
+      {"sinumerik840d-cam-spinner-u5-achskreuz-traori.mpf", "bc-table-table",
+       ":3:1: Siemens variable definitions (DEF)"}};
+  for (const auto& [file, machine, message] : cases) {
+    SCOPED_TRACE(file);
+    const Machine m = test::sample_machine(machine);
+    const ErrorSet e = test::sample_errors(machine);
+    std::ifstream in(test::source_path("tests/data/real/tcp/" + file), std::ios::binary);
+    std::ostringstream out;
+    try {
+      post::post_five_axis(in, file, out, m, e, post::FiveAxisPostOptions{});
+      ADD_FAILURE() << "posted";
+    } catch (const InputError& err) {
+      EXPECT_EQ(std::string(err.what()).rfind(file + message, 0), 0u) << err.what();
+    }
+  }
 }
 
 }  // namespace
