@@ -16,6 +16,8 @@ std::string CorrectionOptions::invalid_reason() const {
   if (!(tolerance_mm > 0) || !(tolerance_rad > 0)) return "tolerances must be positive";
   if (!(singular_sin >= 0 && singular_sin < 1))
     return fmt::format("singular_sin is {:g}, must be in [0, 1)", singular_sin);
+  if (!(outer_damping >= 0 && outer_damping < 1))
+    return fmt::format("outer_damping is {:g}, must be in [0, 1)", outer_damping);
   return {};
 }
 
@@ -24,7 +26,9 @@ namespace {
 // J^-1 at one axis position, block-triangular (see correction.h).
 class InverseJacobian {
  public:
-  InverseJacobian(const Kinematics& kin, const PoseJacobian& J, double singular_sin) : kin_(kin) {
+  InverseJacobian(const Kinematics& kin, const PoseJacobian& J, double singular_sin,
+                  double outer_damping)
+      : kin_(kin) {
     const Machine& m = kin.machine();
     int k = 0;
     for (int i = 0; i < m.axis_count(); ++i)
@@ -42,8 +46,11 @@ class InverseJacobian {
     singular_ = G_.col(0).norm() <= singular_sin;
     if (singular_)
       g_inner_ls_ = G_.col(1).transpose() / G_.col(1).squaredNorm();
-    else
-      N_inv_G_t_ = (G_.transpose() * G_).inverse() * G_.transpose();
+    else {
+      Eigen::Matrix2d N = G_.transpose() * G_;
+      N(0, 0) += outer_damping * outer_damping;
+      N_inv_G_t_ = N.inverse() * G_.transpose();
+    }
   }
 
   bool singular() const { return singular_; }
@@ -95,8 +102,9 @@ bool step_within_tolerances(const Machine& m, const AxisVector& step,
 }  // namespace
 
 bool correction_step(const Kinematics& kin, const PoseJacobian& J_v_u, const Eigen::Vector3d& dP_mm,
-                     const Eigen::Vector3d& dQ, double singular_sin, AxisVector& du) {
-  const InverseJacobian Jinv(kin, J_v_u, singular_sin);
+                     const Eigen::Vector3d& dQ, double singular_sin, AxisVector& du,
+                     double outer_damping) {
+  const InverseJacobian Jinv(kin, J_v_u, singular_sin, outer_damping);
   du = AxisVector::Zero(kin.machine().axis_count());
   Jinv.solve(-dP_mm, -dQ, du);
   return Jinv.singular();
@@ -118,7 +126,7 @@ CorrectionResult CorrectionSolver::correct(const AxisVector& u,
 CorrectionResult CorrectionSolver::correct(const AxisVector& u, const ApproachDirections& dir,
                                            const PoseJacobian& J) const {
   const Machine& m = kin_.machine();
-  const InverseJacobian Jinv(kin_, J, options_.singular_sin);
+  const InverseJacobian Jinv(kin_, J, options_.singular_sin, options_.outer_damping);
   CorrectionResult r;
   r.singular = Jinv.singular();
   r.du = AxisVector::Zero(m.axis_count());

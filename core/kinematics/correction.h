@@ -58,6 +58,13 @@ struct CorrectionOptions {
   /// suppressed. 1e-3 (0.057 deg): a 20 urad orientation error would need
   /// a 1.1 deg turn of C there.
   double singular_sin = 1e-3;
+  /// Damping of the outer rotary axis near the singular position (a sine):
+  /// the rotary block solves (G^T G + diag(lambda^2, 0)) dr = G^T dQ, so the
+  /// outer axis never turns more than 1/(2 lambda) times the orientation
+  /// error it corrects; the part of that error it leaves is the tool-axis
+  /// error's component that only the outer axis could remove. 0: eq. 6 as
+  /// the paper has it (undamped above singular_sin).
+  double outer_damping = 0.0;
   /// Evaluate the residual of a one-step correction too (one more model
   /// evaluation).
   bool residual = false;
@@ -81,9 +88,11 @@ struct CorrectionResult {
 /// CorrectionSolver does (rotary axes by least squares on the orientation
 /// rows, the outer one suppressed at the singular position, then the linear
 /// axes exactly). du is resized and overwritten. Returns whether the pose is
-/// singular (|Q x w_outer| <= singular_sin).
+/// singular (|Q x w_outer| <= singular_sin); `outer_damping` as
+/// CorrectionOptions's.
 bool correction_step(const Kinematics& kin, const PoseJacobian& J_v_u, const Eigen::Vector3d& dP_mm,
-                     const Eigen::Vector3d& dQ, double singular_sin, AxisVector& du);
+                     const Eigen::Vector3d& dQ, double singular_sin, AxisVector& du,
+                     double outer_damping = 0.0);
 
 /// Computes corrections against one error model. Keeps a reference to
 /// `model`, which must outlive it. Immutable; correct() is thread-safe as

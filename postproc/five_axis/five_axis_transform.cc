@@ -74,7 +74,8 @@ AxisVector FiveAxisTransform::command(const AxisVector& u_nominal, bool* singula
     Eigen::Vector3d dP, dQ;
     table_dv(u_nominal, dP, dQ);
     AxisVector du;
-    const bool sing = correction_step(kin_, J, dP, dQ, CorrectionOptions{}.singular_sin, du);
+    const bool sing =
+        correction_step(kin_, J, dP, dQ, CorrectionOptions{}.singular_sin, du, kPostOuterDamping);
     const AxisVector c = u_nominal + du;
     if (singular) *singular = sing;
     return c;

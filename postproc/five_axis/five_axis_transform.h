@@ -22,6 +22,15 @@
 
 namespace volmap::post {
 
+/// The five-axis post's damping of the outer rotary axis near the singular
+/// position (CorrectionOptions::outer_damping, a sine: 0.29 degrees). Without
+/// it, a tool axis 0.3 degrees from C's axis needs C corrections of
+/// hundreds of times the tool-axis error, which change so fast along a move
+/// that 1 um took more than 65536 pieces (real CL files of NX and SOLIDWORKS
+/// CAM); with it they post at 1 um (docs/post-five-axis.md, "Near the
+/// singular position").
+inline constexpr double kPostOuterDamping = 0.005;
+
 class FiveAxisTransform {
  public:
   /// Throws std::invalid_argument for a machine the backward transformation

@@ -205,6 +205,47 @@ TEST(Correction, SingularPositionSuppressesTheOuterAxis) {
   }
 }
 
+// The damped outer axis (CorrectionOptions::outer_damping): the rotary
+// block minimises |G dr + dQ|^2 + lambda^2 dr_outer^2 (its gradient is zero
+// at the result), the outer correction never exceeds |dQ| / (2 lambda),
+// and far from the singular position the damping changes du by about
+// (lambda / sin A)^2 of itself.
+TEST(Correction, DampedOuterAxisNearTheSingularPosition) {
+  const Machine m = load("lei-hsu-xyzac");
+  const ErrorModel model(m, sample_errors("lei-hsu-xyzac"));
+  const double lambda = 0.005;
+  CorrectionOptions o;
+  o.outer_damping = lambda;
+  const CorrectionSolver plain(model), damped(model, o);
+  for (double a_deg : {-0.2, -0.3, -0.6, -2.0, -30.0}) {
+    SCOPED_TRACE(a_deg);
+    AxisVector u(5);
+    u << 10, 20, 30, a_deg * M_PI / 180, 0.7;
+    PoseJacobian J;
+    const ToolPose v = nominal_forward_jacobian(m, u, J);
+    const ToolPose a = model.actual(u);
+    const Eigen::Vector3d dQ = a.axis - v.axis;
+    const CorrectionResult r = damped.correct(u), r0 = plain.correct(u);
+    // Rotary block: C (outer, index 4) and A (inner, index 3).
+    Eigen::Matrix<double, 3, 2> G;
+    G.col(0) = J.block<3, 1>(3, 4);
+    G.col(1) = J.block<3, 1>(3, 3);
+    const Eigen::Vector2d dr(r.du[4], r.du[3]);
+    const Eigen::Vector2d grad =
+        G.transpose() * (G * dr + dQ) + Eigen::Vector2d(lambda * lambda * dr[0], 0.0);
+    EXPECT_LT(grad.norm(), 1e-12 * (1 + dQ.norm()));
+    EXPECT_LE(std::abs(r.du[4]), dQ.norm() / (2 * lambda) + 1e-12);
+    const double s = std::abs(std::sin(u[3]));
+    if (s > 10 * lambda) {
+      EXPECT_LT(std::abs(r.du[4] - r0.du[4]), 2 * (lambda / s) * (lambda / s) * std::abs(r0.du[4]));
+    } else {
+      EXPECT_LT(std::abs(r.du[4]), std::abs(r0.du[4]));  // near it: less C than undamped
+    }
+    // The tip is still placed: the linear axes take what the rotary block leaves.
+    EXPECT_LT((model.actual(u + r.du).tip_mm - v.tip_mm).norm(), 2e-3);
+  }
+}
+
 // Three axes: J = I for a tool on X, Y, Z carriages, so du = -dv, and
 // iterating gives the fixed point x_cmd + e(x_cmd) = x_nominal.
 TEST(Correction, ThreeAxisIsMinusDvIterated) {
