@@ -65,18 +65,7 @@ InputForm detect_input_form(const std::vector<std::string>& lines) {
   bool arc_modal = false;
   for (const std::string& raw : lines) {
     if (is_apt_statement(raw)) return InputForm::kApt;
-    // Comments out.
-    std::string l;
-    int depth = 0;
-    for (char c : raw) {
-      if (c == ';' && depth == 0) break;
-      if (c == '(')
-        ++depth;
-      else if (c == ')')
-        depth = std::max(0, depth - 1);
-      else if (depth == 0)
-        l += c;
-    }
+    const std::string l = gcode_code_of(raw);
     if (std::regex_search(l, kSiemens)) return InputForm::kToolVector;
     static const std::regex kLinear(R"(G0*[01](?![0-9.]))", std::regex::icase);
     if (std::regex_search(l, kArc))

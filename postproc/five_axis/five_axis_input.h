@@ -63,6 +63,10 @@ const char* input_form_name(InputForm form);
 /// a G0/G1 block has I, J or K, or A3=/B3=/C3= appear; else kTcp.
 InputForm detect_input_form(const std::vector<std::string>& lines);
 
+/// A G-code line's code: upper case, without comments ((...) and ';') and
+/// the line's end, trimmed.
+std::string gcode_code_of(const std::string& line);
+
 /// One nominal move.
 struct FiveAxisMove {
   bool rapid = false;

@@ -36,8 +36,9 @@ bool replace_siemens_vector(std::string& text) {
 constexpr int kG43_4Tcp = 434, kG43_5Tcp = 435, kG234Tcp = 2340;
 constexpr int kM128Tcp = 1280, kM129TcpOff = 1290;
 
-// The code of a line, upper case, without comments ((...) and ';').
-std::string code_of(const std::string& line) {
+}  // namespace
+
+std::string gcode_code_of(const std::string& line) {
   std::string out;
   int depth = 0;
   for (char c : line) {
@@ -53,15 +54,13 @@ std::string code_of(const std::string& line) {
   return b == std::string::npos ? std::string() : out.substr(b, e - b + 1);
 }
 
-}  // namespace
-
 void FiveAxisReader::scan_tape() {
   // Tape leader: text before a first '%' that is not the first line.
   int n = 0;
   bool text_before = false;
   for (const std::string& raw : buffered_) {
     ++n;
-    const std::string t = code_of(raw);
+    const std::string t = gcode_code_of(raw);
     if (!t.empty() && t[0] == '%') {
       if (text_before) leader_lines_ = n - 1;
       break;
@@ -71,14 +70,14 @@ void FiveAxisReader::scan_tape() {
   static const std::regex kTcpOn(
       R"((^|[^A-Z0-9.])(M0*428|G0*43\.[45]|G0*234|M0*128|TRAORI)(?![0-9.]))");
   for (const std::string& raw : buffered_)
-    if (std::regex_search(code_of(raw), kTcpOn)) {
+    if (std::regex_search(gcode_code_of(raw), kTcpOn)) {
       tcp_program_ = true;
       break;
     }
 }
 
 bool FiveAxisReader::frame_line(const std::string& text, FiveAxisLine& out) {
-  const std::string t = code_of(text);
+  const std::string t = gcode_code_of(text);
   auto verbatim = [&] {
     out.synthetic = true;
     out.text = text;
