@@ -110,27 +110,29 @@ TEST(FiveAxisDialects, TapeFramePassesAsItIs) {
   EXPECT_NE(text.find("M30\n%\ntext after the tape\n"), std::string::npos) << text;
 }
 
-// The sample tool-vector cone on the A-B dual-rotary table sample (its A
-// about -X carries the part, B about -Y the cradle): posted with its
-// errors, verify finds the tip tens of um off before and within the
-// tolerance after.
-TEST(FiveAxisMachines, AbDualRotaryTablePostsWithinTheTolerance) {
-  const Machine m = test::sample_machine("xyzab-tdr");
-  const ErrorSet e = test::sample_errors("xyzab-tdr");
+// The sample tool-vector cone on the A-B dual-rotary table (A about -X
+// carries the part, B about -Y the cradle) and on the head-head bridge mill
+// (C and B in the spindle head): posted with their errors, verify finds the
+// tip tens of um off before and within the tolerance after.
+TEST(FiveAxisMachines, TableTableAndHeadHeadPostWithinTheTolerance) {
   std::ifstream f(test::source_path("samples/programs/cone-vector.ngc"));
   std::stringstream program;
   program << f.rdbuf();
-  post::FiveAxisPostOptions o;
-  std::istringstream in(program.str());
-  std::ostringstream out;
-  post::post_five_axis(in, "cone-vector.ngc", out, m, e, o);
-  EXPECT_NE(out.str().find(" B"), std::string::npos);
-  std::istringstream nominal(program.str()), compensated(out.str());
-  const post::FiveAxisVerifyResult r = post::verify_five_axis(
-      nominal, "cone-vector.ngc", compensated, "out.ngc", m, e, post::FiveAxisVerifyOptions{});
-  EXPECT_GT(r.before.max_um, 20.0);
-  EXPECT_LT(r.after.max_um, 1.0);
-  EXPECT_LT(r.after.max_urad, 50.0);
+  for (const char* name : {"xyzab-tdr", "bridgemill-bc-head"}) {
+    SCOPED_TRACE(name);
+    const Machine m = test::sample_machine(name);
+    const ErrorSet e = test::sample_errors(name);
+    std::istringstream in(program.str());
+    std::ostringstream out;
+    post::post_five_axis(in, "cone-vector.ngc", out, m, e, post::FiveAxisPostOptions{});
+    EXPECT_NE(out.str().find(" B"), std::string::npos);
+    std::istringstream nominal(program.str()), compensated(out.str());
+    const post::FiveAxisVerifyResult r = post::verify_five_axis(
+        nominal, "cone-vector.ngc", compensated, "out.ngc", m, e, post::FiveAxisVerifyOptions{});
+    EXPECT_GT(r.before.max_um, 20.0);
+    EXPECT_LT(r.after.max_um, 1.0);
+    EXPECT_LT(r.after.max_urad, 50.0);
+  }
 }
 
 // Real TCP programs (tests/data/real/tcp, SOURCES.md): each refused at the

@@ -1,5 +1,6 @@
-// The A-B dual-rotary table sample (samples/machines/xyzab-tdr.json) against
-// LinuxCNC's own kinematics for that machine, xyzab_tdr_kins (its TCP
+// The samples of LinuxCNC's own five-axis machines against LinuxCNC's
+// kinematics for them. The A-B dual-rotary table
+// (samples/machines/xyzab-tdr.json) against xyzab_tdr_kins (its TCP
 // inverse, src/hal/components/xyzab_tdr_kins.comp, typed in here with the
 // sim config's defaults: rotation point (-50, -50, -100), x-offset -20,
 // z-offset -10, tool offset 30): the joints LinuxCNC commands for a
@@ -7,6 +8,9 @@
 // transformation puts the tip there; backward finds them among its
 // solutions; at the singular position (tool axis along A's line) A is held.
 // And the sample's errors give a correction that reaches the nominal pose.
+// The head-head bridge mill (samples/machines/bridgemill-bc-head.json)
+// against 5axiskins (src/emc/kinematics/5axiskins.c, pivot-length 250, W 0):
+// the same, with C held where the tool axis is vertical (B = 0).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -105,6 +109,73 @@ TEST(XyzabTdr, SampleErrorsCorrectedToTheNominalPose) {
     worst_before = std::max(worst_before, (model.actual(u).tip_mm - nominal.tip_mm).norm());
     const AxisVector c = u + solver.correct(u).du;
     worst_after = std::max(worst_after, (model.actual(c).tip_mm - nominal.tip_mm).norm());
+  }
+  EXPECT_GT(worst_before, 0.010);
+  EXPECT_LT(worst_after, 0.2e-3);
+}
+
+// 5axiskins.c, kinematicsForward: the tip from the joints (X Y Z B C,
+// degrees): joints + (0, 0, pivot) + s2r(pivot, C, 180 - B).
+Vector3d linuxcnc_5axis_tip(const Vector3d& xyz, double b_deg, double c_deg) {
+  const double pivot = 250, t = c_deg * kDeg, p = (180.0 - b_deg) * kDeg;
+  return xyz + Vector3d(pivot * std::sin(p) * std::cos(t), pivot * std::sin(p) * std::sin(t),
+                        pivot + pivot * std::cos(p));
+}
+
+TEST(BridgemillHead, ForwardIsLinuxCncs5axiskins) {
+  const Machine m = test::sample_machine("bridgemill-bc-head");
+  const Kinematics kin(m);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> pos(-300, 300), b(-110, 110), c(-180, 180);
+  for (int t = 0; t < 500; ++t) {
+    const Vector3d xyz(pos(rng), pos(rng), pos(rng) / 3 - 100);
+    const double b_deg = b(rng), c_deg = c(rng);
+    AxisVector u(5);  // X Y Z B C
+    u << xyz.x(), xyz.y(), xyz.z(), b_deg * kDeg, c_deg * kDeg;
+    const ToolPose v = nominal_forward(m, u);
+    EXPECT_LT((v.tip_mm - linuxcnc_5axis_tip(xyz, b_deg, c_deg)).norm(), 1e-9) << u.transpose();
+    // The tool axis points from the tip to the pivot: -s2r / pivot.
+    const Vector3d want(-std::sin(b_deg * kDeg) * std::cos(c_deg * kDeg),
+                        -std::sin(b_deg * kDeg) * std::sin(c_deg * kDeg), std::cos(b_deg * kDeg));
+    EXPECT_LT((v.axis - want).norm(), 1e-12);
+    const BackwardSolutions s = kin.backward(v, u);
+    bool found = false;
+    for (int k = 0; k < s.count; ++k)
+      found = found || (s.u[static_cast<size_t>(k)] - u).cwiseAbs().maxCoeff() < 1e-9;
+    EXPECT_TRUE(found) << u.transpose();
+  }
+}
+
+TEST(BridgemillHead, VerticalToolHoldsC) {
+  const Machine m = test::sample_machine("bridgemill-bc-head");
+  const Kinematics kin(m);
+  const ToolPose v{Vector3d(40, -25, 10), Vector3d::UnitZ()};
+  for (double c_prev : {-90.0, 0.0, 33.0, 400.0}) {
+    AxisVector prev(5);
+    prev << 0, 0, 0, 10 * kDeg, c_prev * kDeg;
+    bool singular = false;
+    const AxisVector u = kin.backward_selected(v, prev, &singular);
+    EXPECT_TRUE(singular);
+    EXPECT_NEAR(u[4], c_prev * kDeg, 1e-12);
+    EXPECT_NEAR(u[3], 0.0, 1e-12);
+    EXPECT_LT((nominal_forward(m, u).tip_mm - v.tip_mm).norm(), 1e-9);
+  }
+}
+
+TEST(BridgemillHead, SampleErrorsCorrectedToTheNominalPose) {
+  const Machine m = test::sample_machine("bridgemill-bc-head");
+  const ErrorModel model(m, test::sample_errors("bridgemill-bc-head"));
+  const CorrectionSolver solver(model);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> pos(-300, 300), b(-60, 60), c(0, 360);
+  double worst_before = 0, worst_after = 0;
+  for (int t = 0; t < 200; ++t) {
+    AxisVector u(5);
+    u << pos(rng), pos(rng), pos(rng) / 3 - 100, b(rng) * kDeg, c(rng) * kDeg;
+    const ToolPose nominal = nominal_forward(m, u);
+    worst_before = std::max(worst_before, (model.actual(u).tip_mm - nominal.tip_mm).norm());
+    const AxisVector cmd = u + solver.correct(u).du;
+    worst_after = std::max(worst_after, (model.actual(cmd).tip_mm - nominal.tip_mm).norm());
   }
   EXPECT_GT(worst_before, 0.010);
   EXPECT_LT(worst_after, 0.2e-3);
