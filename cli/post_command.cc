@@ -169,7 +169,7 @@ Runner register_post(CLI::App& app) {
                 "Hold the end value of an error table outside it (default: refuse)");
   add_three_axis_output_options(*sub, *o);
   sub->add_option("IN", o->in, "Input program (- for standard input)")->required();
-  sub->add_option("-o", o->out, "Output program (- for standard output)")->required();
+  sub->add_option("-o,--output", o->out, "Output program (- for standard output)")->required();
   sub->footer(
       "Example:\n  volmap post --machine samples/machines/hsu-3axis.json --errors "
       "samples/errors/hsu-3axis.csv \\\n"

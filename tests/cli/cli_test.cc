@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "tests/support/cli_in_source.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/test_paths.h"
 
@@ -83,6 +84,22 @@ TEST(Cli, HelpEndsWithAnExample) {
   const Result r = run("sensitivity --help");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.out.find("Example:"), std::string::npos);
+}
+
+// Every verb that writes a file takes `--output` as the long form of `-o`:
+// the same bytes either way.
+TEST(Cli, OutputIsTheLongFormOfO) {
+  const std::string dir = volmap::test::fresh_dir("cli_output").string();
+  const std::string args = "post --machine " + sample("machines/hsu-3axis.json") + " --errors " +
+                           sample("errors/hsu-3axis.csv") + " --work-offset 250,200,100 " +
+                           sample("programs/pocket.ngc");
+  ASSERT_EQ(run(args + " -o " + dir + "/short.ngc").status, 0);
+  ASSERT_EQ(run(args + " --output " + dir + "/long.ngc").status, 0);
+  EXPECT_EQ(volmap::test::file_bytes(dir + "/short.ngc"),
+            volmap::test::file_bytes(dir + "/long.ngc"));
+  for (const char* verb : {"post", "map", "export", "identify", "simulate"})
+    EXPECT_NE(run(std::string(verb) + " --help").out.find("-o,--output"), std::string::npos)
+        << verb;
 }
 
 }  // namespace
