@@ -50,7 +50,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "volmap: " << e.what() << " (see volmap --help)\n";
+    const std::string hint = volmap::cli::misspelling_hint(app, argc, argv);
+    std::cerr << "volmap: " << (hint.empty() ? std::string(e.what()) : hint)
+              << " (see volmap --help)\n";
     return 2;
   }
   const CLI::App* verb = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front();

@@ -1,6 +1,8 @@
 #include "cli/message_wording.h"
 
+#include <algorithm>
 #include <cctype>
+#include <vector>
 
 namespace volmap::cli {
 namespace {
@@ -63,6 +65,66 @@ std::string flag_wording(const std::string& message, const CLI::App& app, const 
   }
   out.append(message, at, std::string::npos);
   return out;
+}
+
+namespace {
+
+// Levenshtein distance (insertions, deletions, substitutions).
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// The candidate nearest `word`, if near enough to be a slip ("" if none).
+std::string nearest(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  size_t best_d = std::max<size_t>(2, word.size() / 3) + 1;
+  for (const std::string& c : candidates) {
+    const size_t d = edit_distance(word, c);
+    if (d < best_d) best_d = d, best = c;
+  }
+  return best;
+}
+
+}  // namespace
+
+std::string misspelling_hint(const CLI::App& app, int argc, const char* const* argv) {
+  if (argc < 2 || argv[1][0] == '-') return {};
+  const std::string command = argv[1];
+  const CLI::App* verb = nullptr;
+  std::vector<std::string> commands;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    commands.push_back(sub->get_name());
+    if (sub->get_name() == command) verb = sub;
+  }
+  if (!verb) {
+    const std::string near = nearest(command, commands);
+    return "'" + command + "' is not a volmap command" +
+           (near.empty() ? std::string() : "; did you mean '" + near + "'?");
+  }
+  std::vector<std::string> options;
+  for (const CLI::Option* o : verb->get_options())
+    for (const std::string& n : o->get_lnames()) options.push_back("--" + n);
+  for (int i = 2; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) != 0 || arg == "--") continue;
+    const std::string name = arg.substr(0, arg.find('='));
+    if (std::find(options.begin(), options.end(), name) != options.end()) continue;
+    const std::string near = nearest(name, options);
+    return "unknown option " + name + " of volmap " + command +
+           (near.empty() ? std::string() : "; did you mean " + near + "?");
+  }
+  return {};
 }
 
 }  // namespace volmap::cli

@@ -16,4 +16,9 @@ namespace volmap::cli {
 /// option: `field` -> --field-name, `other.field` -> volmap other --field.
 std::string flag_wording(const std::string& message, const CLI::App& app, const CLI::App* verb);
 
+/// For a command line CLI11 refused: a misspelt command or long option named,
+/// with the nearest one ("'posst' is not a volmap command; did you mean
+/// 'post'?"); empty when the line has neither.
+std::string misspelling_hint(const CLI::App& app, int argc, const char* const* argv);
+
 }  // namespace volmap::cli

@@ -102,6 +102,21 @@ TEST(Cli, OutputIsTheLongFormOfO) {
         << verb;
 }
 
+// A misspelt command or option is named with the nearest one, exit 2.
+TEST(Cli, MisspellingsSuggestTheNearestName) {
+  Result r = run("posst --machine m.json");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err,
+            "volmap: 'posst' is not a volmap command; did you mean 'post'? (see volmap --help)\n");
+  r = run("post --work-ofset 1,2,3 --machine m.json in.ngc -o out.ngc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("unknown option --work-ofset of volmap post; did you mean --work-offset?"),
+            std::string::npos)
+      << r.err;
+  r = run("frobnicate");
+  EXPECT_EQ(r.err, "volmap: 'frobnicate' is not a volmap command (see volmap --help)\n");
+}
+
 }  // namespace
 
 // cli.md writes `volmap export --table T --format FORMAT -o DIR`: formats
