@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     const std::string hint = volmap::cli::misspelling_hint(app, argc, argv);
-    std::cerr << "volmap: " << (hint.empty() ? std::string(e.what()) : hint)
+    std::cerr << "volmap: " << (hint.empty() ? volmap::cli::plain_range(e.what()) : hint)
               << " (see volmap --help)\n";
     return 2;
   }

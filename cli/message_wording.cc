@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <regex>
 #include <vector>
 
 namespace volmap::cli {
@@ -125,6 +126,13 @@ std::string misspelling_hint(const CLI::App& app, int argc, const char* const* a
            (near.empty() ? std::string() : "; did you mean " + near + "?");
   }
   return {};
+}
+
+std::string plain_range(const std::string& message) {
+  // PositiveNumber is Range(smallest positive double, largest double): its
+  // bounds printed with std::to_string.
+  static const std::regex kPositive(R"(Value (\S+) not in range 0\.000000 to [0-9]{30,}\.000000)");
+  return std::regex_replace(message, kPositive, "value $1 must be positive");
 }
 
 }  // namespace volmap::cli

@@ -21,4 +21,9 @@ std::string flag_wording(const std::string& message, const CLI::App& app, const 
 /// 'post'?"); empty when the line has neither.
 std::string misspelling_hint(const CLI::App& app, int argc, const char* const* argv);
 
+/// CLI11's range message in plain numbers: PositiveNumber's "Value -1 not in
+/// range 0.000000 to 1797...(309 digits)" becomes "value -1 must be
+/// positive".
+std::string plain_range(const std::string& message);
+
 }  // namespace volmap::cli

@@ -113,6 +113,10 @@ TEST(Cli, MisspellingsSuggestTheNearestName) {
   EXPECT_NE(r.err.find("unknown option --work-ofset of volmap post; did you mean --work-offset?"),
             std::string::npos)
       << r.err;
+  // A value out of range in plain words, not 1.79e308 in full.
+  r = run("post --machine m.json --errors e.csv --tolerance-um -1 in.ngc -o out.ngc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "volmap: --tolerance-um: value -1 must be positive (see volmap --help)\n");
   r = run("frobnicate");
   EXPECT_EQ(r.err, "volmap: 'frobnicate' is not a volmap command (see volmap --help)\n");
 }
