@@ -63,7 +63,8 @@ Runner register_export(CLI::App& app) {
     if (!o->machine.empty()) options.home = maps::export_home(o->machine, table, o->table);
     options.detection_unit_mm = o->detection_unit_um * 1e-3;
     const std::optional<ErrorSet> errors =
-        maps::export_errors(table, o->errors, parse_errors_format(o->errors_format));
+        maps::export_errors(table, o->errors, parse_errors_format(o->errors_format), o->table,
+                            o->format == "heidenhain" || o->format == "isg-csv");
     if (errors) options.errors = &*errors;
     std::vector<maps::ExportFile> files;
     try {

@@ -22,16 +22,26 @@ std::vector<double> export_home(const std::string& machine_path, const Volumetri
 }
 
 std::optional<ErrorSet> export_errors(const VolumetricTable& table, const std::string& errors_path,
-                                      ErrorsFormat format) {
+                                      ErrorsFormat format, const std::string& table_path,
+                                      bool needed) {
   if (!errors_path.empty()) return load_errors(errors_path, format);
   // The table names the errors file it was built from (as given to volmap
   // map): formats that export the component errors themselves (isg-csv,
   // HEIDENHAIN KinematicsComp) read it from there when no errors file is
   // given, so `export --table T --format F -o DIR` works as cli.md writes
   // it. A given errors file overrides.
-  if (!table.errors_source.empty() && table.errors_source != "-" &&
-      std::filesystem::is_regular_file(table.errors_source))
-    return load_errors(table.errors_source, ErrorsFormat::kAuto);
+  if (table.errors_source.empty() || table.errors_source == "-") return std::nullopt;
+  namespace fs = std::filesystem;
+  const fs::path named(table.errors_source);
+  std::vector<fs::path> places{named};
+  if (named.is_relative()) places.push_back(fs::path(table_path).parent_path() / named);
+  for (const fs::path& p : places)
+    if (fs::is_regular_file(p)) return load_errors(p.string(), ErrorsFormat::kAuto);
+  if (needed)
+    throw std::invalid_argument(fmt::format(
+        "{}: the table was built from the errors file '{}', found neither from the current folder "
+        "nor beside the table; give it with `errors` E.csv",
+        table_path, table.errors_source));
   return std::nullopt;
 }
 

@@ -20,8 +20,13 @@ std::vector<double> export_home(const std::string& machine_path, const Volumetri
                                 const std::string& table_path);
 
 /// The errors file errors_path (format `format`) when given; else the errors
-/// file the table names, when it exists (with the format detected); else none.
+/// file the table names (with the format detected), found as named (from
+/// the current folder) or, a relative name, beside the table file
+/// table_path; else none. `needed` (a format that exports the component
+/// errors): a file the table names that is found neither way is refused
+/// (std::invalid_argument naming it), never left out.
 std::optional<ErrorSet> export_errors(const VolumetricTable& table, const std::string& errors_path,
-                                      ErrorsFormat format);
+                                      ErrorsFormat format, const std::string& table_path,
+                                      bool needed);
 
 }  // namespace volmap::maps

@@ -6,6 +6,8 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -152,4 +154,44 @@ TEST(Cli, ExportReadsTheErrorsFileTheTableNames) {
   const std::string a = slurp(dir + "-a/isg_errors.csv"), b = slurp(dir + "-b/isg_errors.csv");
   EXPECT_FALSE(a.empty());
   EXPECT_EQ(a, b);
+}
+
+// A table keeps the errors file's name as `volmap map` was given it. From
+// another folder, export finds it beside the table or refuses; it never
+// leaves the KinematicsComp tables out.
+TEST(Cli, ExportRefusesAnErrorsFileItCannotFind) {
+  namespace fs = std::filesystem;
+  const fs::path dir = volmap::test::fresh_dir("export_relative");
+  const std::string table = (dir / "hsu.vmt").string();
+  ASSERT_EQ(
+      volmap::test::run_volmap_in_source("map --machine samples/machines/hsu-3axis.json --errors "
+                                         "samples/errors/hsu-3axis.csv --spacing 50,50,50 -o " +
+                                         table)
+          .status,
+      0);
+  // Run from another folder, where the relative name leads nowhere.
+  fs::create_directories(dir / "elsewhere");
+  auto export_from_dir = [&](const std::string& out) {
+    const std::string err = (dir / "err.txt").string();
+    const int st =
+        std::system(("cd '" + (dir / "elsewhere").string() + "' && '" +
+                     volmap::test::volmap_binary() + "' export --table '" + table +
+                     "' --format heidenhain -o '" + (dir / out).string() + "' 2>'" + err + "'")
+                        .c_str());
+    return Result{WIFEXITED(st) ? WEXITSTATUS(st) : -1, "", volmap::test::file_bytes(err)};
+  };
+  Result r = export_from_dir("a");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("the table was built from the errors file 'samples/errors/hsu-3axis.csv', "
+                       "found neither from the current folder nor beside the table; give it with "
+                       "--errors E.csv"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "a"));
+  // Beside the table, under the name the table keeps: found.
+  fs::create_directories(dir / "samples" / "errors");
+  fs::copy_file(sample("errors/hsu-3axis.csv"), dir / "samples" / "errors" / "hsu-3axis.csv");
+  r = export_from_dir("b");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "b" / "KC_X.COM"));
 }
