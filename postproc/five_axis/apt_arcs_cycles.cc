@@ -173,7 +173,7 @@ void AptReader::cycle_record(const AptRecord& r, std::deque<FiveAxisLine>& out) 
   if (!sub.empty() && type == "DRILL") type = sub, sub.clear();
   if (type.empty() || !sub.empty())
     fail(fmt::format("CYCLE/{}: not a cycle volmap writes out (DRILL, DEEP, DEEP2, BRKCHP, REAM)",
-                     first));
+                     apt_shown(first)));
   if (type == "TAP" || type == "BORE")
     fail(
         fmt::format("CYCLE/{}: the spindle must {} in the hole, which plain moves cannot say; "
@@ -190,7 +190,7 @@ void AptReader::cycle_record(const AptRecord& r, std::deque<FiveAxisLine>& out) 
           "CYCLE/ in the positional form (a number where a word such as FEDTO belongs): where "
           "its GOTO stands differs between CAM systems; output the couplet form or GOTO moves");
     if (k + 1 >= r.args.size() || !apt_number(r.args[k + 1], x))
-      fail(fmt::format("CYCLE/: {} needs a number after it", w));
+      fail(fmt::format("CYCLE/: {} needs a number after it", apt_shown(w)));
     if (w == "FEDTO")
       fedto = x;
     else if (w == "RAPTO")
@@ -210,7 +210,7 @@ void AptReader::cycle_record(const AptRecord& r, std::deque<FiveAxisLine>& out) 
     else if (w == "MMPR" || w == "IPR")
       fail("CYCLE/ feed per revolution is not supported; output MMPM or IPM");
     else
-      fail(fmt::format("CYCLE/: '{}' is not understood", w));
+      fail(fmt::format("CYCLE/: '{}' is not understood", apt_shown(w)));
   }
   if (!fedto || !rapto) fail("CYCLE/ needs FEDTO (the depth) and RAPTO (the R level)");
   if (!(feed > 0)) fail("CYCLE/ needs a feed (MMPM or IPM)");

@@ -32,7 +32,7 @@ double AptReader::feed_of(const AptRecord& r, size_t from, bool& per_rev) const 
     else if (apt_number(a, v) && f < 0)
       f = v;
     else
-      fail(fmt::format("FEDRAT/: '{}' is not understood (a feed and MMPM or IPM)", a));
+      fail(fmt::format("FEDRAT/: '{}' is not understood (a feed and MMPM or IPM)", apt_shown(a)));
   }
   return f;
 }

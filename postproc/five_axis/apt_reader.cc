@@ -232,7 +232,7 @@ void AptReader::statement(const std::string& text, int line, std::deque<FiveAxis
     fail(
         fmt::format("{} between CIRCLE/ (line {}) and the GOTO/ that ends the arc; the arc's "
                     "end is undefined: export the CL file again",
-                    r.key, circle_->line));
+                    apt_shown(r.key), circle_->line));
   if (machine_record(r, out) || frame_record(r, out)) return;
   if (r.key == "CUTCOM") {
     // CL points are the tool centre (Creo, NX by default; SOLIDWORKS CAM:

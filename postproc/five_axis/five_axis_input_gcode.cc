@@ -11,6 +11,7 @@
 #include "core/common/units.h"
 #include "gcode/g_codes.h"
 #include "gcode/nc_writer.h"
+#include "postproc/five_axis/apt_reader.h"
 #include "postproc/five_axis/five_axis_input.h"
 
 namespace volmap::post {
@@ -94,7 +95,7 @@ bool FiveAxisReader::frame_line(const std::string& text, FiveAxisLine& out) {
   if (!t.empty() && t[0] == ':')
     fail(1, "a ':' program number (Fanuc tape) is not read; write it as O<number>");
   if (t.size() > 1 && t[0] == 'O' && std::isalpha(static_cast<unsigned char>(t[1])))
-    fail(1, "'" + t.substr(0, 40) +
+    fail(1, "'" + apt_shown(t.substr(0, 40)) +
                 "' is not a program number O<number> (nor a LinuxCNC O-word); correct it in the "
                 "post-processor that wrote it");
   if (t.rfind("DEF ", 0) == 0 || t.find(" DEF ") != std::string::npos)

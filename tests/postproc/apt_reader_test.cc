@@ -346,8 +346,11 @@ TEST(AptReader, UnknownRecordsAreRefusedNeverComments) {
     EXPECT_EQ(why.rfind("t.apt:2: ", 0), 0u) << rec << " -> " << why;
   }
   // Bytes outside printable ASCII are shown escaped, on one line.
-  const std::string why = refusal("GOTO/1,\x01\xff,3\n");
-  EXPECT_NE(why.find("\\x01\\xFF"), std::string::npos) << why;
+  for (const char* bad : {"GOTO/1,\x01\xff,3\n", "FEDRAT/\x01\xff\n", "CYCLE/DRILL,\x01\xff,3\n",
+                          "CYCLE/\x01\xff\n"}) {
+    const std::string why = refusal(bad);
+    EXPECT_NE(why.find("\\x01\\xFF"), std::string::npos) << why;
+  }
 }
 
 // The post of a CL file with two tools: without a tool table refused at the
