@@ -100,23 +100,12 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
 }
 
 void FiveAxisPost::change_tool(const FiveAxisLine& l) {
-  if (!tools_.has_table()) {
-    if (started_ && tool_ >= 0 && l.tool != tool_)
-      fail(fmt::format(
-          "a second tool (T{} after T{}): the machine axes are computed for the machine file's "
-          "tool length; give --tool-table with the program's tools, or post each tool's part "
-          "separately",
-          l.tool, tool_));
-    tool_ = l.tool;
-    return;
-  }
   try {
-    tf_ = &tools_.get(l.tool);
+    tf_ = &tools_.change_to(l.tool, started_);
   } catch (const std::invalid_argument& e) {
-    fail(std::string(e.what()) + "; add it to the tool table");
+    fail(e.what());
   }
-  tool_ = l.tool;
-  rapid_due_ = started_;
+  rapid_due_ = started_ && tools_.has_table();
 }
 
 void FiveAxisPost::write_line_without_move(const FiveAxisLine& l, bool lower) {

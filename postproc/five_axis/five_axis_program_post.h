@@ -144,7 +144,6 @@ class FiveAxisPost {
   void change_tool(const FiveAxisLine& l);
   ToolTransforms& tools_;
   const FiveAxisTransform* tf_;  ///< the tool in the spindle's
-  int tool_ = -1;                ///< its number (-1: the machine file's)
   bool rapid_due_ = false;       ///< a tool was changed: the next move must be a rapid
   int line_ = 0;
   std::string line_ending_ = "\n";

@@ -160,4 +160,23 @@ const FiveAxisTransform& ToolTransforms::get(int tool) {
   return *slot;
 }
 
+const FiveAxisTransform& ToolTransforms::change_to(int tool, bool moved) {
+  if (!has_table()) {
+    if (moved && tool_ >= 0 && tool != tool_)
+      throw std::invalid_argument(
+          "a second tool (T" + std::to_string(tool) + " after T" + std::to_string(tool_) +
+          "): the machine axes are computed for the machine file's tool length; give "
+          "--tool-table with the program's tools, or post each tool's part separately");
+    tool_ = tool;
+    return get(-1);
+  }
+  try {
+    const FiveAxisTransform& t = get(tool);
+    tool_ = tool;
+    return t;
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + "; add it to the tool table");
+  }
+}
+
 }  // namespace volmap::post

@@ -109,12 +109,18 @@ class ToolTransforms {
   const FiveAxisTransform& get(int tool);
   /// Whether a tool table was given.
   bool has_table() const { return !offsets_mm_.empty(); }
+  /// A tool change to `tool` (`moved`: the program moved before it): that
+  /// tool's transform. Without a table the machine file's tool is the only
+  /// one: a second, different tool after moves throws std::invalid_argument,
+  /// as does a tool the table does not have.
+  const FiveAxisTransform& change_to(int tool, bool moved);
 
  private:
   Machine machine_;
   std::map<int, double> offsets_mm_;
   Build build_;
   std::map<int, std::unique_ptr<FiveAxisTransform>> built_;
+  int tool_ = -1;  ///< the last tool changed to (-1: none)
 };
 
 /// Appends value rounded to `decimals` (value x 10^decimals to the nearest

@@ -78,22 +78,12 @@ class Verifier {
   // A tool change in `file` at `line` (the post's rule: without a tool
   // table, a second tool after moves is refused). `moved`: moves before it.
   void use_tool(int tool, bool moved, const std::string& file, int line) {
-    if (!actual_tools_.has_table()) {
-      if (moved && tool_ >= 0 && tool != tool_)
-        throw InputError(file, line,
-                         fmt::format("a second tool (T{} after T{}): give --tool-table with the "
-                                     "program's tools",
-                                     tool, tool_));
-      tool_ = tool;
-      return;
-    }
     try {
-      tf_ = &actual_tools_.get(tool);
-      nominal_tf_ = &nominal_tools_.get(tool);
+      tf_ = &actual_tools_.change_to(tool, moved);
+      nominal_tf_ = &nominal_tools_.change_to(tool, moved);
     } catch (const std::invalid_argument& e) {
-      throw InputError(file, line, std::string(e.what()) + "; add it to the tool table");
+      throw InputError(file, line, e.what());
     }
-    tool_ = tool;
   }
 
   // Nominal tool axis of move k at parameter s.
@@ -168,7 +158,6 @@ class Verifier {
   ToolTransforms actual_tools_, nominal_tools_;
   const FiveAxisTransform* tf_;          ///< the tool in the spindle's, with the errors
   const FiveAxisTransform* nominal_tf_;  ///< and without
-  int tool_ = -1;
 };
 
 // Before: the nominal program under ideal TCP interpolation; its feed moves
