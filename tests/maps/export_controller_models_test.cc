@@ -1,0 +1,122 @@
+// Each controller export read by a model of its controller
+// (tests/maps/controller_models.h) and applied to the simulated real
+// machine: where the controller compensates, the tool tip must land where
+// the program wanted it, within the interpolation error of the table's own
+// grid (computed here from the exact correction) plus the rounding of the
+// file's numbers. A wrong sign, unit or index shows as a residual of the
+// size of the error itself (tens of micrometres).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/model/errors_csv.h"
+#include "core/model/machine_json.h"
+#include "maps/exports/exporters.h"
+#include "maps/tables/table_builder.h"
+#include "tests/maps/controller_models.h"
+#include "tests/maps/export_fixture.h"
+#include "tests/support/test_paths.h"
+
+namespace volmap::maps {
+namespace {
+
+using namespace test_exports;
+using namespace controller_models;
+
+// The fixture's machine with every angular component error zero: its error
+// field is a sum of one function per axis, which is what one-dimensional
+// tables can represent everywhere, not only on the home lines.
+const ErrorModel& separable_model() {
+  static const ErrorModel model(
+      load_machine_json(test::source_path("tests/data/maps/small-3axis.json")),
+      load_errors_csv(test::source_path("tests/data/maps/small-3axis-separable.csv")));
+  return model;
+}
+
+[[maybe_unused]] const VolumetricTable& separable_table() {
+  static const VolumetricTable t = build_table(separable_model(), {50, 50, 50});
+  return t;
+}
+
+constexpr std::array<double, 3> kTravel = {200.0, 100.0, 100.0};
+
+// Points along axis `axis` through the home position (0, 0, 0), off the
+// grid's nodes (3.7 mm apart) and at both ends.
+std::vector<Eigen::Vector3d> home_line(int axis) {
+  std::vector<Eigen::Vector3d> out;
+  for (double s = 0.0; s < kTravel[static_cast<size_t>(axis)]; s += 3.7) {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    p[axis] = s;
+    out.push_back(p);
+  }
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();
+  end[axis] = kTravel[static_cast<size_t>(axis)];
+  out.push_back(end);
+  return out;
+}
+
+// Points through the whole volume, off the nodes.
+[[maybe_unused]] std::vector<Eigen::Vector3d> volume_points() {
+  std::vector<Eigen::Vector3d> out;
+  for (double x = 1.3; x < 200.0; x += 23.1)
+    for (double y = 0.7; y < 100.0; y += 17.3)
+      for (double z = 2.9; z < 100.0; z += 19.7) out.emplace_back(x, y, z);
+  return out;
+}
+
+// What linear interpolation between the 50 mm nodes of the exact correction
+// costs at p (per component, mm), along the given axis: the bound a
+// faithful controller table of that grid can reach on that line.
+Eigen::Vector3d interpolation_cost(const ErrorModel& m, const Eigen::Vector3d& p, int axis,
+                                   int x_dir) {
+  const double s = p[axis];
+  const double lo = std::min(std::floor(s / 50.0) * 50.0, kTravel[static_cast<size_t>(axis)] - 50);
+  Eigen::Vector3d a = p, b = p;
+  a[axis] = lo;
+  b[axis] = lo + 50.0;
+  const double f = (s - lo) / 50.0;
+  const Eigen::Vector3d lin = (1 - f) * (exact_command(m, a, x_dir) - a) +
+                              f * (exact_command(m, b, x_dir) - b);
+  return (lin - (exact_command(m, p, x_dir) - p)).cwiseAbs();
+}
+
+// The worst interpolation cost along every axis's home line (mm).
+double worst_interpolation_cost(const ErrorModel& m, int x_dir) {
+  double worst = 0.0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const Eigen::Vector3d& p : home_line(axis))
+      worst = std::max(worst, interpolation_cost(m, p, axis, x_dir).maxCoeff());
+  return worst;
+}
+
+// ---- LinuxCNC ----
+
+TEST(ControllerModelLinuxCnc, EachJointLandsOnItsNominalPositionInBothDirections) {
+  const std::vector<ExportFile> files = export_table(small_table(), "linuxcnc");
+  std::array<LinuxCncJoint, 3> joints;
+  for (int j = 0; j < 3; ++j)
+    joints[static_cast<size_t>(j)] =
+        read_linuxcnc_comp(file_named(files, std::string(1, "XYZ"[j]) + ".comp").text);
+  ASSERT_EQ(joints[0].nominal.size(), 5u);
+  for (int dir : {+1, -1}) {
+    const double bound = worst_interpolation_cost(small_model(), dir) + 2e-6;
+    for (int j = 0; j < 3; ++j) {
+      double worst = 0.0;
+      for (const Eigen::Vector3d& p : home_line(j)) {
+        Eigen::Vector3d c = p;
+        for (int k = 0; k < 3; ++k) c[k] += joints[static_cast<size_t>(k)].trim(p[k], dir);
+        // Joint compensation corrects each joint along itself only.
+        worst = std::max(worst, std::abs((actual_tip(small_model(), c, dir) - p)[j]));
+      }
+      EXPECT_LE(worst, bound) << "joint " << j << " direction " << dir;
+    }
+  }
+  // Without the files the positioning error is there to see: the check can fail.
+  EXPECT_GT(std::abs((actual_tip(small_model(), {200, 0, 0}, +1) - Eigen::Vector3d(200, 0, 0))[0]),
+            0.01);
+}
+
+}  // namespace
+}  // namespace volmap::maps
