@@ -51,18 +51,30 @@ std::vector<std::int64_t> resampled_nodes(const GridAxis& g) {
   return keep;
 }
 
-std::string row(std::int64_t nr, const std::string& pos, const std::vector<std::string>& cells) {
-  std::string s = fmt::format("{:<6}{:>12}", nr, pos);
-  for (const std::string& c : cells) s += fmt::format(" {:>12}", c);
-  // Trailing blanks make no difference to the control but do to diff.
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s + "\n";
-}
-
-std::string header(const std::vector<std::string>& columns) {
-  std::string s = fmt::format("{:<6}{:>12}", "NR", "AXISPOS");
-  for (const std::string& c : columns) s += fmt::format(" {:>12}", c);
-  return s + "\n";
+// A TNC table as the control and the open readers (pyLSV2's table reader)
+// read it: "BEGIN <name>[ MM]", the header row, one row per entry, "[END]",
+// CRLF line ends. A column starts where its name starts in the header and
+// runs to where the next name starts; values are left-aligned at the
+// column's start and blank-padded, every line padded to the full width, so
+// slicing at the header's positions gives each value whole. Width: the
+// longest of the name and its values, plus one blank (the header names stay
+// separated, also the last one, which a regex reader needs).
+std::string tnc_table(const std::string& begin, const std::vector<std::string>& columns,
+                      const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> width;
+  for (size_t c = 0; c < columns.size(); ++c) {
+    size_t w = columns[c].size();
+    for (const auto& r : rows) w = std::max(w, r[c].size());
+    width.push_back(w + 1);
+  }
+  auto line = [&](const std::vector<std::string>& cells) {
+    std::string s;
+    for (size_t c = 0; c < cells.size(); ++c) s += fmt::format("{:<{}}", cells[c], width[c]);
+    return s + "\r\n";
+  };
+  std::string text = "BEGIN " + begin + "\r\n" + line(columns);
+  for (const auto& r : rows) text += line(r);
+  return text + "[END]\r\n";
 }
 
 // ISG-style name of a location error for the notes: EC0X stays EC0X.
@@ -97,34 +109,28 @@ ExportFile axis_com_file(const VolumetricTable& t, const std::vector<std::int64_
     backlash = along_axis(t, home, in, du_channel(t, in), -1);
     for (double& v : backlash) v = -v;
   }
-  std::vector<std::string> columns = {"X", "Y", "Z"};
+  std::vector<std::string> columns = {"NR", "AXISPOS"};
   for (int out = 0; out < 3; ++out)
-    columns[static_cast<size_t>(out)] =
-        std::string(1, axis_char(t.grid[static_cast<size_t>(out)].axis));
+    columns.push_back(std::string(1, axis_char(t.grid[static_cast<size_t>(out)].axis)));
   if (bidir) columns.push_back("BACKLASH");
-  ExportFile f;
-  f.name = fmt::format("{}.COM", k);
-  f.text = fmt::format("BEGIN {} MM\n", f.name) + header(columns);
-  std::int64_t nr = 0;
+  std::vector<std::vector<std::string>> rows;
   for (std::int64_t node : keep) {
-    std::vector<std::string> cells;
+    std::vector<std::string> cells = {std::to_string(rows.size()),
+                                      signed_fixed(display_position(g.axis, g.node(node)), 4)};
     for (int out = 0; out < 3; ++out)
       cells.push_back(signed_fixed(col[static_cast<size_t>(out)][static_cast<size_t>(node)], 4));
     if (bidir) cells.push_back(signed_fixed(backlash[static_cast<size_t>(node)], 4));
-    f.text += row(nr++, signed_fixed(display_position(g.axis, g.node(node)), 4), cells);
+    rows.push_back(std::move(cells));
   }
-  f.text += "[END]\n";
-  return f;
+  const std::string name = fmt::format("{}.COM", k);
+  return {name, tnc_table(name + " MM", columns, rows)};
 }
 
 // KC_<K>.COM: the component errors of axis g (all zero without errors) at the
 // table's nodes of K, resampled to the table limit.
 ExportFile kinematics_comp_file(const GridAxis& g, const AxisErrors* e) {
   const std::vector<std::int64_t> keep = resampled_nodes(g);
-  ExportFile f;
-  f.name = fmt::format("KC_{}.COM", axis_char(g.axis));
-  f.text = fmt::format("BEGIN {} MM\n", f.name) + header({"C1", "C2", "C3", "C4", "C5", "C6"});
-  std::int64_t nr = 0;
+  std::vector<std::vector<std::string>> rows;
   for (std::int64_t node : keep) {
     std::array<double, kComponentCount> v{};
     if (e != nullptr) {
@@ -135,14 +141,15 @@ ExportFile kinematics_comp_file(const GridAxis& g, const AxisErrors* e) {
             fmt::format("`format` heidenhain: the errors do not cover the table: {}", ex.what()));
       }
     }
-    std::vector<std::string> cells;
+    std::vector<std::string> cells = {std::to_string(rows.size()),
+                                      signed_fixed(display_position(g.axis, g.node(node)), 4)};
     for (int c = 0; c < kComponentCount; ++c)
       cells.push_back(c < 3 ? signed_fixed(v[static_cast<size_t>(c)], 6)
                             : signed_fixed(v[static_cast<size_t>(c)] * 180.0 / M_PI, 8));
-    f.text += row(nr++, signed_fixed(display_position(g.axis, g.node(node)), 4), cells);
+    rows.push_back(std::move(cells));
   }
-  f.text += "[END]\n";
-  return f;
+  const std::string name = fmt::format("KC_{}.COM", axis_char(g.axis));
+  return {name, tnc_table(name + " MM", {"NR", "AXISPOS", "C1", "C2", "C3", "C4", "C5", "C6"}, rows)};
 }
 
 }  // namespace
@@ -157,7 +164,14 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
   std::vector<ExportFile> files;
   std::string notes = fmt::format(
       "volmap export for HEIDENHAIN TNC: machine {}, errors {}\n"
-      "Units: positions (AXISPOS) mm or degrees; values mm (angles of KC_*.COM in degrees).\n",
+      "Units: positions (AXISPOS) mm or degrees; values mm (angles of KC_*.COM in degrees).\n"
+      "Layout: TNC tables, CRLF line ends; a column starts where its name starts in the header\n"
+      "row, values are left-aligned in it (as the TNC's own tables and pyLSV2's reader have\n"
+      "them). Enter VOLMAP.CMA and the .COM tables as the machine's documentation says for\n"
+      "nonlinear axis error compensation (MP730 / the axis's compensation setting).\n"
+      "Not confirmed by a HEIDENHAIN source, check on the control before use: the sign of the\n"
+      "<K>.COM values (error, as MP720's linear compensation takes it), the points a table may\n"
+      "have on an iTNC 530 / TNC 6x0 (256 on the TNC 4xx), and the unit of the KC_*.COM angles.\n",
       t.machine_name, t.errors_source);
   const std::vector<std::int64_t> home = home_line_nodes(t, o);
 
@@ -171,8 +185,7 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
         "  that the tables add up. Bidirectional K: the own-axis column holds the positive\n"
         "  direction, BACKLASH the value for the negative direction of traverse; cross columns\n"
         "  the mean.\n";
-    std::string cma_header = fmt::format("{:<6}", "NR");
-    std::string cma_row = fmt::format("{:<6}", 0);
+    std::vector<std::string> cma_columns = {"NR"}, cma_row = {"0"};
     for (int in = 0; in < 3; ++in) {
       const GridAxis& g = t.grid[static_cast<size_t>(in)];
       const char k = axis_char(g.axis);
@@ -183,15 +196,12 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
             "end; at most {} points per table)\n",
             k, g.count, keep.size(), keep[1] - keep[0], kMaxPointsPerTable);
       files.push_back(axis_com_file(t, home, in, keep));
-      cma_header += fmt::format(" {:<10}", std::string(1, k));
-      cma_row += fmt::format(" {:<10}", fmt::format("{}.COM", k));
+      cma_columns.push_back(std::string(1, k));
+      cma_row.push_back(fmt::format("{}.COM", k));
     }
-    auto trim = [](std::string s) {
-      while (!s.empty() && s.back() == ' ') s.pop_back();
-      return s + "\n";
-    };
-    files.push_back({"VOLMAP.CMA", "BEGIN VOLMAP.CMA\n" + trim(cma_header + " ACTIVE") +
-                                       trim(cma_row + " *") + "[END]\n"});
+    cma_columns.push_back("ACTIVE");
+    cma_row.push_back("*");
+    files.push_back({"VOLMAP.CMA", tnc_table("VOLMAP.CMA", cma_columns, {cma_row})});
   }
 
   if (o.errors != nullptr) {

@@ -116,4 +116,114 @@ inline LinuxCncJoint read_linuxcnc_comp(const std::string& text) {
   return j;
 }
 
+
+// ---- SINUMERIK .ini part programs (LEC %_N_AX_EEC_INI, CEC %_N_NC_CEC_INI) ----
+//
+// The lines a SINUMERIK reads from these files: the program name line
+// ("%_N_<name>_INI"), CHANDATA(n), comments after ';', system variable
+// assignments "$NAME[i,j,...]=value" and the end M17. Anything else is an
+// error here (the control would raise an alarm on it). Values are kept as
+// text by name and index list, e.g. values["$AA_ENC_COMP"]["0,3,AX1"].
+struct SiemensIni {
+  std::string program;
+  std::map<std::string, std::map<std::string, std::string>> values;
+  const std::string& at(const std::string& name, const std::string& index) const {
+    auto n = values.find(name);
+    if (n == values.end() || n->second.count(index) == 0)
+      throw std::runtime_error("no " + name + "[" + index + "]");
+    return n->second.at(index);
+  }
+  double number_at(const std::string& name, const std::string& index) const {
+    return number(at(name, index), name + "[" + index + "]");
+  }
+};
+
+inline SiemensIni read_siemens_ini(const std::string& text) {
+  SiemensIni ini;
+  bool ended = false;
+  for (const std::string& raw : lines_of(text)) {
+    std::string line = raw.substr(0, raw.find(';'));
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    if (line.empty()) continue;
+    if (ended) throw std::runtime_error("text after M17: " + line);
+    if (ini.program.empty()) {
+      if (line.rfind("%_N_", 0) != 0 || line.size() < 9 || line.substr(line.size() - 4) != "_INI")
+        throw std::runtime_error("first line is not %_N_<name>_INI: " + line);
+      ini.program = line;
+      continue;
+    }
+    if (line.rfind("CHANDATA(", 0) == 0) continue;
+    if (line == "M17") {
+      ended = true;
+      continue;
+    }
+    const size_t open = line.find('['), close = line.find(']'), eq = line.find('=');
+    if (line[0] != '$' || open == std::string::npos || close < open || eq != close + 1)
+      throw std::runtime_error("not an assignment: " + line);
+    ini.values[line.substr(0, open)][line.substr(open + 1, close - open - 1)] =
+        line.substr(eq + 1);
+  }
+  if (!ended) throw std::runtime_error("no M17");
+  return ini;
+}
+
+
+// ---- HEIDENHAIN TNC tables (.COM, .CMA) ----
+//
+// Read as the TNC and pyLSV2's table reader (pyLSV2/table_reader.py,
+// NCTable.parse_table) read them: line 1 "BEGIN <name>[ MM|INCH]", line 2
+// the column names, each followed by blanks; a column starts where its name
+// starts and ends where the next name starts (the last one at the end of
+// the header line); every row is sliced at those positions and the slice
+// stripped of blanks; "[END]" ends the table. Nothing is split at blanks,
+// so a value that is not inside its column's slice is read wrong or not
+// at all, as on the control.
+struct TncTable {
+  std::string begin;  ///< the BEGIN line's text after "BEGIN "
+  std::vector<std::string> columns;
+  std::vector<std::map<std::string, std::string>> rows;
+  double number_at(size_t row, const std::string& column) const {
+    return number(rows.at(row).at(column), begin + " row " + std::to_string(row) + " " + column);
+  }
+};
+
+inline TncTable read_tnc_table(const std::string& text) {
+  const std::vector<std::string> lines = lines_of(text);
+  if (lines.size() < 3 || lines[0].rfind("BEGIN ", 0) != 0)
+    throw std::runtime_error("not a TNC table");
+  TncTable t;
+  t.begin = lines[0].substr(6);
+  const std::string& header = lines[1];
+  std::vector<size_t> start;
+  for (size_t i = 0; i < header.size();) {
+    if (header[i] == ' ') {
+      ++i;
+      continue;
+    }
+    const size_t end = header.find(' ', i);
+    if (end == std::string::npos) throw std::runtime_error("column name without a blank after it");
+    start.push_back(i);
+    t.columns.push_back(header.substr(i, end - i));
+    i = end;
+  }
+  start.push_back(header.size());
+  bool ended = false;
+  for (size_t l = 2; l < lines.size(); ++l) {
+    if (lines[l].rfind("[END]", 0) == 0) {
+      ended = true;
+      break;
+    }
+    std::map<std::string, std::string> row;
+    for (size_t c = 0; c < t.columns.size(); ++c) {
+      std::string cell =
+          start[c] < lines[l].size() ? lines[l].substr(start[c], start[c + 1] - start[c]) : "";
+      const size_t b = cell.find_first_not_of(' '), e = cell.find_last_not_of(' ');
+      row[t.columns[c]] = b == std::string::npos ? "" : cell.substr(b, e - b + 1);
+    }
+    t.rows.push_back(std::move(row));
+  }
+  if (!ended) throw std::runtime_error("no [END]");
+  return t;
+}
+
 }  // namespace volmap::maps::controller_models

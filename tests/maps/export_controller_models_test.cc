@@ -35,7 +35,7 @@ const ErrorModel& separable_model() {
   return model;
 }
 
-[[maybe_unused]] const VolumetricTable& separable_table() {
+const VolumetricTable& separable_table() {
   static const VolumetricTable t = build_table(separable_model(), {50, 50, 50});
   return t;
 }
@@ -58,7 +58,7 @@ std::vector<Eigen::Vector3d> home_line(int axis) {
 }
 
 // Points through the whole volume, off the nodes.
-[[maybe_unused]] std::vector<Eigen::Vector3d> volume_points() {
+std::vector<Eigen::Vector3d> volume_points() {
   std::vector<Eigen::Vector3d> out;
   for (double x = 1.3; x < 200.0; x += 23.1)
     for (double y = 0.7; y < 100.0; y += 17.3)
@@ -116,6 +116,87 @@ TEST(ControllerModelLinuxCnc, EachJointLandsOnItsNominalPositionInBothDirections
   // Without the files the positioning error is there to see: the check can fail.
   EXPECT_GT(std::abs((actual_tip(small_model(), {200, 0, 0}, +1) - Eigen::Vector3d(200, 0, 0))[0]),
             0.01);
+}
+
+
+// ---- HEIDENHAIN nonlinear axis error compensation ----
+
+// The TNC's compensation from the active line of the .CMA: every table
+// entered in the column of axis K gives, per axis column O of the table, a
+// value interpolated linearly at the position of K (AXISPOS); a BACKLASH
+// column holds the own axis's value for the negative direction of
+// traverse. Values are errors (MP720's sign: positive when the axis travels
+// too far), so the control commands O at the wanted position minus the
+// error.
+struct TncCompensation {
+  // (input axis K, table) of the active .CMA line
+  std::vector<std::pair<int, TncTable>> tables;
+
+  Eigen::Vector3d command(const Eigen::Vector3d& p, const std::array<int, 3>& dir) const {
+    Eigen::Vector3d c = p;
+    for (const auto& [k, table] : tables) {
+      std::vector<double> pos;
+      for (size_t r = 0; r < table.rows.size(); ++r) pos.push_back(table.number_at(r, "AXISPOS"));
+      for (int o = 0; o < 3; ++o) {
+        const std::string col(1, "XYZ"[o]);
+        const bool own_negative = o == k && dir[static_cast<size_t>(k)] < 0 &&
+                                  table.rows[0].count("BACKLASH") != 0;
+        if (table.rows[0].count(col) == 0) continue;
+        std::vector<double> val;
+        for (size_t r = 0; r < table.rows.size(); ++r)
+          val.push_back(table.number_at(r, own_negative ? "BACKLASH" : col));
+        c[o] -= interpolate(pos, val, p[k]);
+      }
+    }
+    return c;
+  }
+};
+
+TncCompensation read_tnc_compensation(const std::vector<ExportFile>& files) {
+  TncCompensation comp;
+  const TncTable cma = read_tnc_table(file_named(files, "VOLMAP.CMA").text);
+  int active = 0;
+  for (size_t r = 0; r < cma.rows.size(); ++r)
+    if (cma.rows[r].at("ACTIVE") == "*") {
+      ++active;
+      for (int k = 0; k < 3; ++k) {
+        const std::string& name = cma.rows[r].at(std::string(1, "XYZ"[k]));
+        if (!name.empty()) comp.tables.emplace_back(k, read_tnc_table(file_named(files, name).text));
+      }
+    }
+  EXPECT_EQ(active, 1) << "one active line";
+  return comp;
+}
+
+TEST(ControllerModelHeidenhain, TheTablesSlicedAtTheHeaderPositionsPutTheTipOnTheHomeLines) {
+  const TncCompensation comp = read_tnc_compensation(export_table(small_table(), "heidenhain"));
+  ASSERT_EQ(comp.tables.size(), 3u);
+  for (int dir : {+1, -1}) {
+    // 4 decimals: each of up to three table values rounds by 0.05 um.
+    const double bound = worst_interpolation_cost(small_model(), dir) + 1.6e-4;
+    for (int axis = 0; axis < 3; ++axis) {
+      double worst = 0.0;
+      for (const Eigen::Vector3d& p : home_line(axis)) {
+        const Eigen::Vector3d c = comp.command(p, {dir, 0, 0});
+        worst = std::max(worst, (actual_tip(small_model(), c, dir) - p).cwiseAbs().maxCoeff());
+      }
+      EXPECT_LE(worst, bound) << "along " << "XYZ"[axis] << ", X moving " << dir;
+    }
+  }
+}
+
+TEST(ControllerModelHeidenhain, TheTablesAddUpOverTheVolumeOfASeparableMachine) {
+  const TncCompensation comp = read_tnc_compensation(export_table(separable_table(), "heidenhain"));
+  for (int dir : {+1, -1}) {
+    const double bound = 3 * worst_interpolation_cost(separable_model(), dir) + 1.6e-4;
+    double worst = 0.0;
+    for (const Eigen::Vector3d& p : volume_points()) {
+      const Eigen::Vector3d c = comp.command(p, {dir, 0, 0});
+      worst = std::max(worst, (actual_tip(separable_model(), c, dir) - p).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LE(worst, bound) << "X moving " << dir;
+    EXPECT_GT(worst, 0.0);
+  }
 }
 
 }  // namespace

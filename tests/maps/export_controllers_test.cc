@@ -57,16 +57,22 @@ std::vector<std::vector<std::string>> com_rows(const std::string& text,
   std::istringstream in(text);
   std::string line;
   std::vector<std::vector<std::string>> rows;
-  std::getline(in, line);
+  auto next = [&] {
+    const bool ok = static_cast<bool>(std::getline(in, line));
+    EXPECT_TRUE(!ok || (!line.empty() && line.back() == '\r')) << "TNC lines end in CRLF";
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    return ok;
+  };
+  next();
   EXPECT_EQ(line.rfind("BEGIN ", 0), 0u) << line;
-  std::getline(in, line);
+  next();
   {
     std::istringstream h(line);
     std::string c;
     while (h >> c) header->push_back(c);
   }
   bool ended = false;
-  while (std::getline(in, line)) {
+  while (next()) {
     if (line == "[END]") {
       ended = true;
       break;
@@ -115,9 +121,9 @@ TEST(ExportHeidenhain, ComTablesAreTheCorrectionAlongEachAxis) {
   EXPECT_NEAR(std::stod(rows[4][2]), x_error(Component::EX, 200, +1), 1e-5);
   // The assignment table enters each table in the column of its input axis.
   const std::string cma = file_named(files, "VOLMAP.CMA").text;
-  EXPECT_EQ(cma.substr(0, 17), "BEGIN VOLMAP.CMA\n");
-  EXPECT_NE(cma.find("X.COM      Y.COM      Z.COM"), std::string::npos) << cma;
-  EXPECT_EQ(cma.substr(cma.size() - 6), "[END]\n");
+  EXPECT_EQ(cma.substr(0, 18), "BEGIN VOLMAP.CMA\r\n");
+  EXPECT_NE(cma.find("X.COM Y.COM Z.COM *"), std::string::npos) << cma;
+  EXPECT_EQ(cma.substr(cma.size() - 7), "[END]\r\n");
 }
 
 TEST(ExportHeidenhain, KinematicsCompTablesAreTheComponentErrors) {
