@@ -57,11 +57,17 @@ std::vector<ExportFile> linuxcnc(const VolumetricTable& t, const ExportOptions& 
 }
 
 // Siemens LEC: $AA_ENC_COMP[0,N,AXn] per axis, equidistant from _MIN to
-// _MAX in _STEP. A positive compensation value moves the axis in the
-// negative direction (SINUMERIK function manual, K3/LEC), so the value is
-// -du (the error along the axis at the commanded position), mean of both
-// approach directions; half the difference belongs in the backlash machine
-// data and is given in a comment.
+// _MAX in _STEP (SINUMERIK 840D sl Extended Functions, K3 4.4.2). MSEC
+// modifies the axis's actual value by the table value, and "a positive
+// compensation value causes the corresponding machine axis to move in the
+// negative direction", so the value is the error along the axis at the
+// position, -du, mean of both approach directions (half the difference
+// belongs in the backlash machine data and is given in a comment). "The
+// compensation value at the reference point [should be] zero" (K3 4.4.1):
+// the table holds the error minus its value at the reference point (the
+// machine's home position, interpolated between the nodes), and that value
+// is given in a comment as the offset the reference point or a work offset
+// must take.
 std::vector<ExportFile> siemens_lec(const VolumetricTable& t, const ExportOptions& o) {
   require_three_axis(t, "siemens-lec");
   constexpr std::int64_t kMaxPoints = 5000;
@@ -69,8 +75,11 @@ std::vector<ExportFile> siemens_lec(const VolumetricTable& t, const ExportOption
   std::string text = "%_N_AX_EEC_INI\n";
   text += provenance(t, ";");
   text +=
-      "; values: error along the axis at the commanded position, mm (a positive value moves "
-      "the axis negative)\n";
+      "; values: error along the axis at the position minus the error at the reference point,\n"
+      ";   mm (a positive value moves the axis negative; K3: zero at the reference point)\n"
+      "; load with MD32700 $MA_ENC_COMP_ENABLE[0,AXn]=0, then set it to 1 (the table becomes\n"
+      ";   write-protected) and POWER ON; MD38000 $MA_MM_ENC_COMP_MAX_POINTS[0,AXn] >= the\n"
+      ";   points of the axis\n";
   text += "CHANDATA(1)\n";
   for (int j = 0; j < 3; ++j) {
     const GridAxis& g = t.grid[static_cast<size_t>(j)];
@@ -81,9 +90,17 @@ std::vector<ExportFile> siemens_lec(const VolumetricTable& t, const ExportOption
           "(MD38000 MM_ENC_COMP_MAX_POINTS): build the table with a coarser spacing",
           axis_char(g.axis), g.count, kMaxPoints));
     const int c = du_channel(t, j);
-    const std::vector<double> mean = along_axis(t, home, j, c, 0);
+    std::vector<double> error = along_axis(t, home, j, c, 0);
+    for (double& v : error) v = -v;
+    const double reference =
+        static_cast<size_t>(j) < o.home.size() ? o.home[static_cast<size_t>(j)] : g.start;
+    const double at_reference = interpolate_nodes(g, error, reference);
     const std::string ax = fmt::format("AX{}", j + 1);
-    text += fmt::format("; axis {} = {}\n", ax, axis_char(g.axis));
+    text += fmt::format("; axis {} = {}, {} points\n", ax, axis_char(g.axis), g.count);
+    text += fmt::format(
+        "; {} reference point {} mm: error there {} mm, not in the table; the reference point "
+        "offset (MD34090 $MA_REFP_MOVE_DIST_CORR) or the work offset takes it\n",
+        ax, fixed(reference), fixed(at_reference));
     if (is_bidirectional(t, j)) {
       const std::vector<double> fwd = along_axis(t, home, j, c, +1);
       const std::vector<double> rev = along_axis(t, home, j, c, -1);
@@ -95,8 +112,8 @@ std::vector<ExportFile> siemens_lec(const VolumetricTable& t, const ExportOption
           axis_char(g.axis), fixed(sum / static_cast<double>(fwd.size())));
     }
     for (std::int64_t k = 0; k < g.count; ++k)
-      text +=
-          fmt::format("$AA_ENC_COMP[0,{},{}]={}\n", k, ax, fixed(-mean[static_cast<size_t>(k)]));
+      text += fmt::format("$AA_ENC_COMP[0,{},{}]={}\n", k, ax,
+                          fixed(error[static_cast<size_t>(k)] - at_reference));
     text += fmt::format("$AA_ENC_COMP_STEP[0,{}]={}\n", ax, fixed(g.spacing));
     text += fmt::format("$AA_ENC_COMP_MIN[0,{}]={}\n", ax, fixed(g.start));
     text += fmt::format("$AA_ENC_COMP_MAX[0,{}]={}\n", ax, fixed(g.end));
@@ -108,11 +125,16 @@ std::vector<ExportFile> siemens_lec(const VolumetricTable& t, const ExportOption
 
 // Siemens CEC: one table per (input axis, output axis) pair with input !=
 // output: the straightness / squareness of the output axis along the input
-// axis on the home line, as the correction to add to the output axis
-// (du of the output axis, mm), zero at the home node so that tables of
-// several inputs add up without counting the home value twice. A
+// axis on the home line. Sign: the table is read at the input axis's
+// setpoint and its output "is applied" to the output axis "as an additional
+// setpoint" (K3 4.4.3: the setpoint position of the compensation axis is
+// altered) -- unlike LEC, which modifies the actual value -- so the value
+// is the correction to add to the output axis (du of the output axis, mm),
+// zero at the home node (K3's rule for the reference point) so that tables
+// of several inputs add up without counting the home value twice. A
 // bidirectional input axis gets one table per direction ($AN_CEC_DIRECTION
-// 1 / -1), others one table for both (0).
+// 1 / -1), others one table for both (0). A table acts only while SD41300
+// $SN_CEC_TABLE_ENABLE[t] = 1 (K3 4.4.3, preconditions): the file sets it.
 std::vector<ExportFile> siemens_cec(const VolumetricTable& t, const ExportOptions& o) {
   require_three_axis(t, "siemens-cec");
   constexpr std::int64_t kMaxPoints = 2000;
@@ -120,9 +142,12 @@ std::vector<ExportFile> siemens_cec(const VolumetricTable& t, const ExportOption
   const std::vector<std::int64_t> home = home_line_nodes(t, o);
   std::string text = "%_N_NC_CEC_INI\n";
   text += provenance(t, ";");
-  text += "; values: correction added to the output axis, mm, zero at the home node\n";
+  text +=
+      "; values: correction added to the output axis setpoint, mm, zero at the home node\n"
+      "; load with MD32710 $MA_CEC_ENABLE[AXn]=0 on the output axes, then set it to 1 and\n"
+      ";   POWER ON; SD41300 $SN_CEC_TABLE_ENABLE[t]=1 (set below) enables each table\n";
   text += "CHANDATA(1)\n";
-  std::string sizes;
+  std::string sizes, enables;
   int table = 0;
   for (int in = 0; in < 3; ++in) {
     const GridAxis& g = t.grid[static_cast<size_t>(in)];
@@ -158,11 +183,12 @@ std::vector<ExportFile> siemens_cec(const VolumetricTable& t, const ExportOption
         text += fmt::format("$AN_CEC_MULT_BY_TABLE[{}]=0\n", table);
         text += fmt::format("$AN_CEC_IS_MODULO[{}]=0\n", table);
         sizes += fmt::format("; MD18342 $MN_MM_CEC_MAX_POINTS[{}] >= {}\n", table, g.count);
+        enables += fmt::format("$SN_CEC_TABLE_ENABLE[{}]=1\n", table);
         ++table;
       }
     }
   }
-  text += sizes;
+  text += enables + sizes;
   text += "M17\n";
   return {{"siemens_cec.ini", text}};
 }

@@ -149,7 +149,8 @@ ExportFile kinematics_comp_file(const GridAxis& g, const AxisErrors* e) {
     rows.push_back(std::move(cells));
   }
   const std::string name = fmt::format("KC_{}.COM", axis_char(g.axis));
-  return {name, tnc_table(name + " MM", {"NR", "AXISPOS", "C1", "C2", "C3", "C4", "C5", "C6"}, rows)};
+  return {name,
+          tnc_table(name + " MM", {"NR", "AXISPOS", "C1", "C2", "C3", "C4", "C5", "C6"}, rows)};
 }
 
 }  // namespace

@@ -92,6 +92,16 @@ std::vector<double> along_axis(const VolumetricTable& t, const std::vector<std::
   return out;
 }
 
+double interpolate_nodes(const GridAxis& g, const std::vector<double>& values, double pos) {
+  if (pos <= g.node(0)) return values.front();
+  for (std::int64_t k = 1; k < g.count; ++k)
+    if (pos <= g.node(k)) {
+      const double f = (pos - g.node(k - 1)) / (g.node(k) - g.node(k - 1));
+      return (1 - f) * values[static_cast<size_t>(k - 1)] + f * values[static_cast<size_t>(k)];
+    }
+  return values.back();
+}
+
 const ErrorSet& require_errors(const ExportOptions& o, const std::string& format) {
   if (o.errors == nullptr)
     throw ExportError(fmt::format(

@@ -76,6 +76,9 @@ std::vector<std::int64_t> home_line_nodes(const VolumetricTable& t, const Export
 /// over the direction layers of the other bidirectional axes. Internal units.
 std::vector<double> along_axis(const VolumetricTable& t, const std::vector<std::int64_t>& home,
                                int axis, int channel, int dir);
+/// Values given at the nodes of g, interpolated linearly at pos (held at the
+/// travel ends).
+double interpolate_nodes(const GridAxis& g, const std::vector<double>& values, double pos);
 /// Refuses tables without the three-axis correction channels.
 void require_three_axis(const VolumetricTable& t, const std::string& format);
 /// Refuses when options.errors is null (formats that need the component errors).

@@ -116,7 +116,6 @@ inline LinuxCncJoint read_linuxcnc_comp(const std::string& text) {
   return j;
 }
 
-
 // ---- SINUMERIK .ini part programs (LEC %_N_AX_EEC_INI, CEC %_N_NC_CEC_INI) ----
 //
 // The lines a SINUMERIK reads from these files: the program name line
@@ -160,13 +159,114 @@ inline SiemensIni read_siemens_ini(const std::string& text) {
     const size_t open = line.find('['), close = line.find(']'), eq = line.find('=');
     if (line[0] != '$' || open == std::string::npos || close < open || eq != close + 1)
       throw std::runtime_error("not an assignment: " + line);
-    ini.values[line.substr(0, open)][line.substr(open + 1, close - open - 1)] =
-        line.substr(eq + 1);
+    ini.values[line.substr(0, open)][line.substr(open + 1, close - open - 1)] = line.substr(eq + 1);
   }
   if (!ended) throw std::runtime_error("no M17");
   return ini;
 }
 
+// AXn -> n - 1 (the general machine axis names the exports use).
+inline int siemens_axis(std::string name) {
+  if (name.size() > 2 && name.front() == '(' && name.back() == ')')
+    name = name.substr(1, name.size() - 2);
+  if (name.size() != 3 || name.rfind("AX", 0) != 0 || name[2] < '1' || name[2] > '3')
+    throw std::runtime_error("not AX1..AX3: " + name);
+  return name[2] - '1';
+}
+
+/// The points of an equidistant SINUMERIK table: positions MIN + N STEP for
+/// N = 0 .. (MAX - MIN) / STEP, values read by `value_of(N)` (each must be
+/// there). Modulo tables are not used by the exports and refused here.
+inline void siemens_points(double min, double max, double step,
+                           const std::function<double(int)>& value_of, std::vector<double>& pos,
+                           std::vector<double>& val) {
+  const double n = (max - min) / step;
+  if (!(step > 0) || std::abs(n - std::round(n)) > 1e-9) throw std::runtime_error("bad STEP");
+  for (int k = 0; k <= static_cast<int>(std::lround(n)); ++k) {
+    pos.push_back(min + k * step);
+    val.push_back(value_of(k));
+  }
+}
+
+// LEC (K3 4.4.2, MSEC): the actual value of the axis's measuring system is
+// modified by the table value at the axis's position, linearly interpolated,
+// the end values held outside MIN..MAX; "a positive compensation value
+// causes the corresponding machine axis to move in the negative
+// direction". The position loop drives the modified actual value m + v(m)
+// to the setpoint s, so the encoder (the axis) stands at m = s - v(m).
+struct SiemensLec {
+  std::array<std::vector<double>, 3> pos, val;
+  double axis_position(int axis, double setpoint) const {
+    double m = setpoint;
+    for (int it = 0; it < 5; ++it)
+      m = setpoint - interpolate(pos[static_cast<size_t>(axis)], val[static_cast<size_t>(axis)], m);
+    return m;
+  }
+};
+
+inline SiemensLec read_siemens_lec(const SiemensIni& ini) {
+  if (ini.program != "%_N_AX_EEC_INI") throw std::runtime_error("not %_N_AX_EEC_INI");
+  SiemensLec lec;
+  for (const auto& [index, text] : ini.values.at("$AA_ENC_COMP_STEP")) {
+    const std::string ax = index.substr(index.find(',') + 1);
+    const int a = siemens_axis(ax);
+    if (ini.number_at("$AA_ENC_COMP_IS_MODULO", index) != 0) throw std::runtime_error("modulo");
+    siemens_points(
+        ini.number_at("$AA_ENC_COMP_MIN", index), ini.number_at("$AA_ENC_COMP_MAX", index),
+        number(text, "STEP"),
+        [&](int k) { return ini.number_at("$AA_ENC_COMP", "0," + std::to_string(k) + "," + ax); },
+        lec.pos[static_cast<size_t>(a)], lec.val[static_cast<size_t>(a)]);
+  }
+  return lec;
+}
+
+// CEC (K3 4.4.3): table t is read at the setpoint of its input axis
+// (linear interpolation, end values held), for both directions of travel
+// of the input axis (DIRECTION 0) or only the positive (1) / negative (-1)
+// one, and its output is added to the setpoint of its output axis; tables
+// of one axis add up. A table acts only while SD41300
+// $SN_CEC_TABLE_ENABLE[t] = 1 (not set: 0).
+struct SiemensCec {
+  struct Table {
+    int input = 0, output = 0, direction = 0;
+    bool enabled = false;
+    std::vector<double> pos, val;
+  };
+  std::vector<Table> tables;
+  Eigen::Vector3d added(const Eigen::Vector3d& setpoint, const std::array<int, 3>& moving) const {
+    Eigen::Vector3d add = Eigen::Vector3d::Zero();
+    for (const Table& t : tables) {
+      const int m = moving[static_cast<size_t>(t.input)];
+      if (!t.enabled || (t.direction != 0 && t.direction != m)) continue;
+      add[t.output] += interpolate(t.pos, t.val, setpoint[t.input]);
+    }
+    return add;
+  }
+};
+
+inline SiemensCec read_siemens_cec(const SiemensIni& ini) {
+  if (ini.program != "%_N_NC_CEC_INI") throw std::runtime_error("not %_N_NC_CEC_INI");
+  SiemensCec cec;
+  for (const auto& [index, text] : ini.values.at("$AN_CEC_INPUT_AXIS")) {
+    SiemensCec::Table t;
+    t.input = siemens_axis(text);
+    t.output = siemens_axis(ini.at("$AN_CEC_OUTPUT_AXIS", index));
+    t.direction = static_cast<int>(ini.number_at("$AN_CEC_DIRECTION", index));
+    if (ini.number_at("$AN_CEC_MULT_BY_TABLE", index) != 0 ||
+        ini.number_at("$AN_CEC_IS_MODULO", index) != 0)
+      throw std::runtime_error("multiplied or modulo table");
+    auto enable = ini.values.find("$SN_CEC_TABLE_ENABLE");
+    t.enabled = enable != ini.values.end() && enable->second.count(index) != 0 &&
+                number(enable->second.at(index), "SD41300") == 1;
+    siemens_points(
+        ini.number_at("$AN_CEC_MIN", index), ini.number_at("$AN_CEC_MAX", index),
+        ini.number_at("$AN_CEC_STEP", index),
+        [&](int k) { return ini.number_at("$AN_CEC", index + "," + std::to_string(k)); }, t.pos,
+        t.val);
+    cec.tables.push_back(std::move(t));
+  }
+  return cec;
+}
 
 // ---- HEIDENHAIN TNC tables (.COM, .CMA) ----
 //

@@ -42,16 +42,17 @@ const VolumetricTable& separable_table() {
 
 constexpr std::array<double, 3> kTravel = {200.0, 100.0, 100.0};
 
-// Points along axis `axis` through the home position (0, 0, 0), off the
-// grid's nodes (3.7 mm apart) and at both ends.
-std::vector<Eigen::Vector3d> home_line(int axis) {
+// Points along axis `axis` through the home position (the machine's, 0 0 0,
+// unless given), off the grid's nodes (3.7 mm apart) and at both ends.
+std::vector<Eigen::Vector3d> home_line(int axis,
+                                       const Eigen::Vector3d& home = Eigen::Vector3d::Zero()) {
   std::vector<Eigen::Vector3d> out;
   for (double s = 0.0; s < kTravel[static_cast<size_t>(axis)]; s += 3.7) {
-    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    Eigen::Vector3d p = home;
     p[axis] = s;
     out.push_back(p);
   }
-  Eigen::Vector3d end = Eigen::Vector3d::Zero();
+  Eigen::Vector3d end = home;
   end[axis] = kTravel[static_cast<size_t>(axis)];
   out.push_back(end);
   return out;
@@ -77,16 +78,17 @@ Eigen::Vector3d interpolation_cost(const ErrorModel& m, const Eigen::Vector3d& p
   a[axis] = lo;
   b[axis] = lo + 50.0;
   const double f = (s - lo) / 50.0;
-  const Eigen::Vector3d lin = (1 - f) * (exact_command(m, a, x_dir) - a) +
-                              f * (exact_command(m, b, x_dir) - b);
+  const Eigen::Vector3d lin =
+      (1 - f) * (exact_command(m, a, x_dir) - a) + f * (exact_command(m, b, x_dir) - b);
   return (lin - (exact_command(m, p, x_dir) - p)).cwiseAbs();
 }
 
 // The worst interpolation cost along every axis's home line (mm).
-double worst_interpolation_cost(const ErrorModel& m, int x_dir) {
+double worst_interpolation_cost(const ErrorModel& m, int x_dir,
+                                const Eigen::Vector3d& home = Eigen::Vector3d::Zero()) {
   double worst = 0.0;
   for (int axis = 0; axis < 3; ++axis)
-    for (const Eigen::Vector3d& p : home_line(axis))
+    for (const Eigen::Vector3d& p : home_line(axis, home))
       worst = std::max(worst, interpolation_cost(m, p, axis, x_dir).maxCoeff());
   return worst;
 }
@@ -118,6 +120,90 @@ TEST(ControllerModelLinuxCnc, EachJointLandsOnItsNominalPositionInBothDirections
             0.01);
 }
 
+// ---- SINUMERIK LEC and CEC together ----
+
+// The error at the reference point each LEC table leaves out (K3: the table
+// is zero there), from the comment that says where it goes.
+Eigen::Vector3d lec_reference_errors(const std::string& text) {
+  Eigen::Vector3d e = Eigen::Vector3d::Constant(NAN);
+  for (const std::string& line : lines_of(text)) {
+    const size_t at = line.find("error there ");
+    if (line.rfind("; AX", 0) != 0 || at == std::string::npos) continue;
+    e[siemens_axis(line.substr(2, 3))] = std::stod(line.substr(at + 12));
+  }
+  if (!e.allFinite()) throw std::runtime_error("an axis without its reference point error");
+  return e;
+}
+
+struct SinumerikRun {
+  SiemensLec lec;
+  SiemensCec cec;
+  Eigen::Vector3d reference_error;
+  // Axis positions for the wanted position p: CEC adds to the setpoints,
+  // then each axis's LEC moves it to where its modified actual value
+  // equals the setpoint.
+  Eigen::Vector3d command(const Eigen::Vector3d& p, int x_dir) const {
+    const Eigen::Vector3d s = p + cec.added(p, {x_dir, 0, 0});
+    return {lec.axis_position(0, s[0]), lec.axis_position(1, s[1]), lec.axis_position(2, s[2])};
+  }
+};
+
+SinumerikRun sinumerik(const VolumetricTable& t, const ExportOptions& o) {
+  const std::string lec_text = export_table(t, "siemens-lec", o)[0].text;
+  return {read_siemens_lec(read_siemens_ini(lec_text)),
+          read_siemens_cec(read_siemens_ini(export_table(t, "siemens-cec", o)[0].text)),
+          lec_reference_errors(lec_text)};
+}
+
+// Worst residual over `points` after the documented reference-point errors
+// (the only thing the tables leave out by K3's rule) are taken off; X's
+// own component is the mean of both approach directions (LEC has one table
+// for both; the reversal goes to the backlash machine data).
+double sinumerik_worst(const ErrorModel& m, const SinumerikRun& run,
+                       const std::vector<Eigen::Vector3d>& points) {
+  double worst = 0.0;
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3d plus = actual_tip(m, run.command(p, +1), +1) - p;
+    const Eigen::Vector3d minus = actual_tip(m, run.command(p, -1), -1) - p;
+    Eigen::Vector3d r = 0.5 * (plus + minus) - run.reference_error;
+    worst = std::max(worst, r.cwiseAbs().maxCoeff());
+    for (const Eigen::Vector3d& d : {plus, minus})
+      worst = std::max({worst, std::abs(d[1] - run.reference_error[1]),
+                        std::abs(d[2] - run.reference_error[2])});
+  }
+  return worst;
+}
+
+TEST(ControllerModelSinumerik, LecAndCecPutTheTipOnTheHomeLinesUpToTheReferencePointError) {
+  ExportOptions o;
+  o.home = {100.0, 50.0, 50.0};  // reference points inside the travel, where the error is not 0
+  const SinumerikRun run = sinumerik(small_table(), o);
+  const Eigen::Vector3d home(100, 50, 50);
+  // The reference-point errors are the errors at home, which the tables leave out.
+  const Eigen::Vector3d at_home =
+      0.5 * (actual_tip(small_model(), home, +1) + actual_tip(small_model(), home, -1)) - home;
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(run.reference_error[d], at_home[d], 1e-6) << d;
+  EXPECT_GT(run.reference_error.cwiseAbs().maxCoeff(), 0.002);
+  std::vector<Eigen::Vector3d> points;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const Eigen::Vector3d& p : home_line(axis, home)) points.push_back(p);
+  const double bound = 3 * std::max(worst_interpolation_cost(small_model(), +1, home),
+                                    worst_interpolation_cost(small_model(), -1, home)) +
+                       4e-6;
+  EXPECT_LE(sinumerik_worst(small_model(), run, points), bound);
+}
+
+TEST(ControllerModelSinumerik, LecAndCecAddUpOverTheVolumeOfASeparableMachine) {
+  const SinumerikRun run = sinumerik(separable_table(), {});
+  const double bound = 3 * std::max(worst_interpolation_cost(separable_model(), +1),
+                                    worst_interpolation_cost(separable_model(), -1)) +
+                       4e-6;
+  EXPECT_LE(sinumerik_worst(separable_model(), run, volume_points()), bound);
+  // The check can fail: without CEC the straightness and squareness remain.
+  SinumerikRun lec_only = run;
+  lec_only.cec.tables.clear();
+  EXPECT_GT(sinumerik_worst(separable_model(), lec_only, volume_points()), 0.001);
+}
 
 // ---- HEIDENHAIN nonlinear axis error compensation ----
 
@@ -139,8 +225,8 @@ struct TncCompensation {
       for (size_t r = 0; r < table.rows.size(); ++r) pos.push_back(table.number_at(r, "AXISPOS"));
       for (int o = 0; o < 3; ++o) {
         const std::string col(1, "XYZ"[o]);
-        const bool own_negative = o == k && dir[static_cast<size_t>(k)] < 0 &&
-                                  table.rows[0].count("BACKLASH") != 0;
+        const bool own_negative =
+            o == k && dir[static_cast<size_t>(k)] < 0 && table.rows[0].count("BACKLASH") != 0;
         if (table.rows[0].count(col) == 0) continue;
         std::vector<double> val;
         for (size_t r = 0; r < table.rows.size(); ++r)
@@ -161,7 +247,8 @@ TncCompensation read_tnc_compensation(const std::vector<ExportFile>& files) {
       ++active;
       for (int k = 0; k < 3; ++k) {
         const std::string& name = cma.rows[r].at(std::string(1, "XYZ"[k]));
-        if (!name.empty()) comp.tables.emplace_back(k, read_tnc_table(file_named(files, name).text));
+        if (!name.empty())
+          comp.tables.emplace_back(k, read_tnc_table(file_named(files, name).text));
       }
     }
   EXPECT_EQ(active, 1) << "one active line";
@@ -180,7 +267,8 @@ TEST(ControllerModelHeidenhain, TheTablesSlicedAtTheHeaderPositionsPutTheTipOnTh
         const Eigen::Vector3d c = comp.command(p, {dir, 0, 0});
         worst = std::max(worst, (actual_tip(small_model(), c, dir) - p).cwiseAbs().maxCoeff());
       }
-      EXPECT_LE(worst, bound) << "along " << "XYZ"[axis] << ", X moving " << dir;
+      EXPECT_LE(worst, bound) << "along "
+                              << "XYZ"[axis] << ", X moving " << dir;
     }
   }
 }
