@@ -21,7 +21,9 @@ namespace {
 Runner register_export(CLI::App& app) {
   struct Opts {
     std::string table, format, output, machine, errors, errors_format = "auto";
-    double detection_unit_um = 1.0;
+    double detection_unit_um = 1.0, input_increment_um = 1.0;
+    std::string fanuc_series = "30i", reference_direction = "+";
+    std::vector<std::string> param_3605;
     bool json = false;
   };
   auto o = std::make_shared<Opts>();
@@ -49,6 +51,20 @@ Runner register_export(CLI::App& app) {
                   "fanuc: detection unit of the axes, um (default 1); compensation values are "
                   "integers in it")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--fanuc-series", o->fanuc_series,
+                  "fanuc: the control's series, which sets the limits, units and record form: "
+                  "30i (default; also 31i, 32i, 0i-F) or 16i (also 18i, 21i, 0i-A..0i-D)");
+  sub->add_option("--fanuc-param-3605", o->param_3605,
+                  "fanuc: parameter 3605 as the control shows it (8 binary digits, bit 7 first), "
+                  "once or per axis (comma-separated); bit 0 is set from the table, the others "
+                  "kept. Without it 3605 is not written (FANUC.txt says which bit to set)")
+      ->delimiter(',');
+  sub->add_option("--fanuc-reference-direction", o->reference_direction,
+                  "fanuc: reference position return direction, + (1006#5 ZMI = 0, default) or -")
+      ->check(CLI::IsMember({"+", "-"}));
+  sub->add_option("--input-increment-um", o->input_increment_um,
+                  "fanuc, 16i series: least input increment, um (default 1), the unit of 3624")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--json", o->json, "Write the list of files as one JSON document to stdout");
   sub->footer(
       "Example:\n  volmap export --table hsu.vmt --format linuxcnc -o hsu-linuxcnc/\n"
@@ -62,6 +78,10 @@ Runner register_export(CLI::App& app) {
     maps::ExportOptions options;
     if (!o->machine.empty()) options.home = maps::export_home(o->machine, table, o->table);
     options.detection_unit_mm = o->detection_unit_um * 1e-3;
+    options.fanuc.series = maps::parse_fanuc_series(o->fanuc_series);
+    options.fanuc.param_3605 = o->param_3605;
+    options.fanuc.reference_direction = o->reference_direction == "-" ? -1 : +1;
+    options.fanuc.input_increment_mm = o->input_increment_um * 1e-3;
     const std::optional<ErrorSet> errors =
         maps::export_errors(table, o->errors, parse_errors_format(o->errors_format), o->table,
                             o->format == "heidenhain" || o->format == "isg-csv");

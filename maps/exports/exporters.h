@@ -33,6 +33,33 @@ struct ExportFile {
   std::string text;
 };
 
+/// What the FANUC export needs to know about the control (docs/exports.md,
+/// "fanuc"): its series, the current value of the bit parameter it changes,
+/// the direction of reference position return, the least input increment.
+struct FanucOptions {
+  /// k16i: Series 16i/18i/21i and 0i-A/B/C/D (points 0..1023, -7..7 per
+  /// point, 3624 an integer in least input increments, tapes without Q1).
+  /// k30i: Series 30i/31i/32i and 0i-F (points 0..1535, -128..127 per
+  /// point, 3624 a real number in mm, Q1 records, 3D error compensation).
+  enum class Series : std::uint8_t { k16i, k30i };
+  Series series = Series::k30i;
+  /// Parameter 3605 of axes 1..3 as the control shows it (8 binary digits,
+  /// bit 7 first): bit 0 (BDPx) is set from the table, the other bits are
+  /// kept. Empty: 3605 is not written (FANUC.txt says which bit to set).
+  std::vector<std::string> param_3605;
+  /// Reference position return direction of every axis (1006#5 ZMIx = 0:
+  /// +1, 1: -1): the table of that direction is zero at the reference
+  /// position, 3627 holds the other direction's value there.
+  int reference_direction = +1;
+  /// 3624's unit on the 16i series (mm).
+  double input_increment_mm = 0.001;
+};
+
+/// "16i" (also 18i, 21i, 0i-d and older 0i), "30i" (also 31i, 32i, 0i-f);
+/// throws std::invalid_argument naming the choices ("0i" alone is refused:
+/// 0i-D and 0i-F differ).
+FanucOptions::Series parse_fanuc_series(const std::string& name);
+
 struct ExportOptions {
   /// Machine home position (mm, rad) by axis: picks the home line of the
   /// one-dimensional formats. Empty: each grid's start.
@@ -45,6 +72,7 @@ struct ExportOptions {
   /// Fanuc detection unit (mm): pitch and 3D compensation values are
   /// integers in this unit, the interval must be a whole multiple of it.
   double detection_unit_mm = 0.001;
+  FanucOptions fanuc;
 };
 
 /// The formats, in the order of shared/spec/cli.md's priority.
@@ -68,6 +96,19 @@ std::vector<ExportFile> siemens_cec(const VolumetricTable& t, const ExportOption
 std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions& o);
 std::vector<ExportFile> fanuc(const VolumetricTable& t, const ExportOptions& o);
 std::vector<ExportFile> isg_csv(const VolumetricTable& t, const ExportOptions& o);
+
+/// One axis of the FANUC pitch error compensation, for FANUC.txt.
+struct AxisPitchSummary {
+  std::int64_t reference = 0, first = 0, last = 0;  ///< 3620, 3621, 3622
+  bool bidirectional = false;
+  int magnification = 1;                ///< 3623
+  std::int64_t other_at_reference = 0;  ///< 3627, detection units
+  double dropped_mm = 0.0;              ///< compensation at the reference position, left out
+};
+/// FANUC.txt (export_fanuc_notes.cc); outside: 3-D sheet values beyond -128..127.
+std::string fanuc_notes(const VolumetricTable& t, const std::vector<std::int64_t>& home,
+                        const std::vector<AxisPitchSummary>& axes, const ExportOptions& o,
+                        std::int64_t outside);
 
 /// Index of the grid node nearest the home position on each axis.
 std::vector<std::int64_t> home_line_nodes(const VolumetricTable& t, const ExportOptions& o);

@@ -17,6 +17,7 @@
 #include "maps/tables/table_builder.h"
 #include "tests/maps/controller_models.h"
 #include "tests/maps/export_fixture.h"
+#include "tests/maps/fanuc_controller_model.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap::maps {
@@ -203,6 +204,123 @@ TEST(ControllerModelSinumerik, LecAndCecAddUpOverTheVolumeOfASeparableMachine) {
   SinumerikRun lec_only = run;
   lec_only.cec.tables.clear();
   EXPECT_GT(sinumerik_worst(separable_model(), lec_only, volume_points()), 0.001);
+}
+
+// ---- FANUC stored pitch error compensation and 3-D error compensation ----
+
+// The compensation at the reference position each axis's table leaves out
+// (FANUC.txt, "the compensation at the reference position, V µm").
+Eigen::Vector3d fanuc_dropped_mm(const std::string& notes) {
+  Eigen::Vector3d d = Eigen::Vector3d::Constant(NAN);
+  for (const std::string& line : lines_of(notes)) {
+    const size_t at = line.find("at the reference position, ");
+    if (line.rfind("  A", 0) != 0 || at == std::string::npos) continue;
+    d[line[3] - '1'] = std::stod(line.substr(at + 27)) * 1e-3;
+  }
+  if (!d.allFinite()) throw std::runtime_error("an axis without its reference compensation");
+  return d;
+}
+
+// Every axis on its home line, in both directions: the control's
+// compensation puts the axis on its nominal position up to the
+// compensation at the reference position, which the table leaves out.
+void expect_fanuc_axes_land(const ExportOptions& o, const Eigen::Vector3d& home) {
+  const std::vector<ExportFile> files = export_table(small_table(), "fanuc", o);
+  const FanucTape tape = read_fanuc_tape(file_named(files, "fanuc_pitch.txt").text);
+  EXPECT_EQ(tape.q1, o.fanuc.series == FanucOptions::Series::k30i);
+  const Eigen::Vector3d dropped = fanuc_dropped_mm(file_named(files, "FANUC.txt").text);
+  for (int dir : {+1, -1}) {
+    for (int j = 0; j < 3; ++j) {
+      const double bound = worst_interpolation_cost(small_model(), dir, home) +
+                           (tape.param(3623, j) + 1) * o.detection_unit_mm;
+      double worst = 0.0;
+      for (const Eigen::Vector3d& p : home_line(j, home)) {
+        Eigen::Vector3d c = p;
+        c[j] += fanuc_pitch_compensation(tape, j, p[j], dir, home[j], o.fanuc.reference_direction,
+                                         o.detection_unit_mm, o.fanuc.input_increment_mm);
+        worst = std::max(worst, std::abs((actual_tip(small_model(), c, dir) - p)[j] + dropped[j]));
+      }
+      EXPECT_LE(worst, bound) << "axis " << j << " moving " << dir << " series "
+                              << (tape.q1 ? "30i" : "16i") << " ZMI "
+                              << o.fanuc.reference_direction;
+    }
+  }
+}
+
+TEST(ControllerModelFanuc, PitchCompensationPutsEachAxisOnItsNominalPosition) {
+  const std::vector<Eigen::Vector3d> homes = {Eigen::Vector3d(0, 0, 0),
+                                              Eigen::Vector3d(100, 50, 50)};
+  for (auto series : {FanucOptions::Series::k30i, FanucOptions::Series::k16i})
+    for (int zmi : {+1, -1})
+      for (const Eigen::Vector3d& home : homes) {
+        ExportOptions o;
+        o.fanuc.series = series;
+        o.fanuc.reference_direction = zmi;
+        o.home = {home[0], home[1], home[2]};
+        expect_fanuc_axes_land(o, home);
+      }
+}
+
+// 30i three-dimensional error compensation: the control interpolates the
+// vertex vectors trilinearly in the cell holding the position (FANUC
+// A-79351E) and adds them to the command. Over the whole volume of the
+// machine with angular errors, the mean of both X directions lands within
+// the trilinear interpolation error of the grid plus half a unit.
+TEST(ControllerModelFanuc, ThreeDimensionalCompensationCorrectsTheWholeVolume) {
+  const std::string sheet =
+      file_named(export_table(small_table(), "fanuc"), "fanuc_3d_transcription.csv").text;
+  std::map<std::array<int, 3>, Eigen::Vector3d> vertex;
+  for (const std::string& line : lines_of(sheet)) {
+    if (line.empty() || line[0] == '#' || line[0] == 'i') continue;
+    std::vector<double> r;
+    std::istringstream l(line);
+    std::string cell;
+    while (std::getline(l, cell, ',')) r.push_back(std::stod(cell));
+    ASSERT_EQ(r.size(), 9u);
+    vertex[{static_cast<int>(r[0]), static_cast<int>(r[1]), static_cast<int>(r[2])}] =
+        Eigen::Vector3d(r[6], r[7], r[8]) * 1e-3;
+  }
+  ASSERT_EQ(vertex.size(), 45u);
+  auto trilinear = [](const std::function<Eigen::Vector3d(int, int, int)>& at,
+                      const Eigen::Vector3d& p) {
+    const int i = std::min(static_cast<int>(p.x() / 50), 3),
+              j = std::min(static_cast<int>(p.y() / 50), 1),
+              k = std::min(static_cast<int>(p.z() / 50), 1);
+    const Eigen::Vector3d f(p.x() / 50 - i, p.y() / 50 - j, p.z() / 50 - k);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 8; ++c) {
+      const int a = c & 1, b = (c >> 1) & 1, d = (c >> 2) & 1;
+      sum += (a ? f.x() : 1 - f.x()) * (b ? f.y() : 1 - f.y()) * (d ? f.z() : 1 - f.z()) *
+             at(i + a, j + b, k + d);
+    }
+    return sum;
+  };
+  auto mean_correction = [](const Eigen::Vector3d& q) -> Eigen::Vector3d {
+    return 0.5 *
+           ((exact_command(small_model(), q, +1) - q) + (exact_command(small_model(), q, -1) - q));
+  };
+  double worst = 0.0, excess = 0.0;
+  for (const Eigen::Vector3d& p : volume_points()) {
+    const Eigen::Vector3d c = p + trilinear(
+                                      [&](int i, int j, int k) {
+                                        return vertex.at({i, j, k});
+                                      },
+                                      p);
+    const Eigen::Vector3d r =
+        0.5 * ((actual_tip(small_model(), c, +1) - p) + (actual_tip(small_model(), c, -1) - p));
+    // What trilinear interpolation of the exact vertex corrections costs here.
+    const Eigen::Vector3d ideal =
+        trilinear(
+            [&](int i, int j, int k) {
+              return mean_correction(Eigen::Vector3d(50.0 * i, 50.0 * j, 50.0 * k));
+            },
+            p) -
+        mean_correction(p);
+    worst = std::max(worst, r.cwiseAbs().maxCoeff());
+    excess = std::max(excess, (r.cwiseAbs() - ideal.cwiseAbs()).maxCoeff());
+  }
+  EXPECT_LE(excess, 0.5e-3 + 1e-6) << "worst residual " << worst;
+  EXPECT_GT(worst, 0.0);
 }
 
 // ---- HEIDENHAIN nonlinear axis error compensation ----

@@ -168,149 +168,121 @@ TEST(ExportHeidenhain, TablesWithoutCorrectionOrErrorsAreRefused) {
   EXPECT_NO_THROW(export_table(t, "heidenhain", with_errors()));  // KinematicsComp tables only
 }
 
-struct FanucTape {
-  std::map<int, std::array<long, 3>> param;  // number -> value per axis A1..A3
-  std::map<int, long> pitch;                 // compensation point -> value
-};
-
-FanucTape parse_fanuc(const std::string& text) {
-  FanucTape tape;
-  std::istringstream in(text);
+// The parameter records of a tape as text per axis, e.g. "3621" -> {"0", "5", "8"}.
+std::map<int, std::array<std::string, 3>> fanuc_parameters(const std::string& tape) {
+  std::map<int, std::array<std::string, 3>> out;
+  std::istringstream in(tape);
   std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line, "%");
-  while (std::getline(in, line) && line != "%") {
-    EXPECT_EQ(line[0], 'N') << line;
-    const size_t p = line.find('P');
-    const int number = std::stoi(line.substr(1, line.find_first_of("AP") - 1));
-    if (number >= 10000) {
-      tape.pitch[number - 10000] = std::stol(line.substr(p + 1));
-      continue;
-    }
-    std::array<long, 3> v{};
-    for (int a = 0; a < 3; ++a) {
-      const size_t at = line.find(fmt::format("A{}P", a + 1));
-      EXPECT_NE(at, std::string::npos) << line;
-      v[static_cast<size_t>(a)] = std::stol(line.substr(at + 3), nullptr, number == 3605 ? 2 : 10);
-    }
-    tape.param[number] = v;
-  }
-  EXPECT_EQ(line, "%");
-  return tape;
-}
-
-TEST(ExportFanuc, IncrementsResumToTheAbsoluteCorrectionWithinQuantization) {
-  const std::vector<ExportFile> files = export_table(small_table(), "fanuc", with_errors());
-  const FanucTape tape = parse_fanuc(file_named(files, "fanuc_pitch.txt").text);
-  const double unit_um = 1.0;
-  for (int a = 0; a < 3; ++a) {
-    const size_t ai = static_cast<size_t>(a);
-    const long first = tape.param.at(3621)[ai], ref = tape.param.at(3620)[ai],
-               last = tape.param.at(3622)[ai];
-    const long m = tape.param.at(3623)[ai];
-    EXPECT_EQ(tape.param.at(3624)[ai], 50000);  // 50 mm in 1 um units
-    EXPECT_EQ(ref, first);                      // home at the travel start
-    EXPECT_EQ(last - first + 1, a == 0 ? 5 : 3);
-    EXPECT_GE(m, 1);
-    long sum = 0;
-    for (long p = first; p <= last; ++p) {
-      const long v = tape.pitch.at(static_cast<int>(p));
-      EXPECT_LE(std::abs(v), 7) << "point " << p;
-      if (p > ref) sum += v;
-      const int k = static_cast<int>(p - first);
-      double q[3] = {0, 0, 0};
-      q[a] = 50.0 * k;
-      // Positive direction (X bidirectional) or mean (Y, Z, both layers equal).
-      const Eigen::Vector3d du =
-          a == 0
-              ? correction_mm(q[0], q[1], q[2], +1)
-              : 0.5 * (correction_mm(q[0], q[1], q[2], +1) + correction_mm(q[0], q[1], q[2], -1));
-      const Eigen::Vector3d du0 =
-          a == 0 ? correction_mm(0, 0, 0, +1)
-                 : 0.5 * (correction_mm(0, 0, 0, +1) + correction_mm(0, 0, 0, -1));
-      EXPECT_NEAR(static_cast<double>(sum * m) * unit_um, (du[a] - du0[a]) * 1e3,
-                  0.5 * static_cast<double>(m) * unit_um + 1e-6)
-          << "axis " << a << " point " << p;
-    }
-  }
-  // X is bidirectional: the negative-direction points follow, and 3627 is
-  // the negative-direction correction at the reference minus the positive one (4 um).
-  EXPECT_EQ(tape.param.at(3605)[0], 1);
-  EXPECT_EQ(tape.param.at(3605)[1], 0);
-  EXPECT_EQ(tape.param.at(3626)[0], 5);
-  EXPECT_EQ(tape.param.at(3627)[0],
-            std::lround((correction_mm(0, 0, 0, -1).x() - correction_mm(0, 0, 0, +1).x()) * 1e3));
-  EXPECT_EQ(tape.param.at(3621)[1], 10);  // X uses points 0..9 (both directions)
-}
-
-TEST(ExportFanuc, ReferenceInsideTheTravelSumsOnBothSides) {
-  // Home at X = 100, Y = 50: points before the reference carry the
-  // increments that lead up to it, C(k) = -sum of the values of points
-  // k+1 .. reference.
-  ExportOptions o = with_errors();
-  o.home = {100.0, 50.0, 0.0};
-  const FanucTape tape =
-      parse_fanuc(file_named(export_table(small_table(), "fanuc", o), "fanuc_pitch.txt").text);
-  const long first = tape.param.at(3621)[0], ref = tape.param.at(3620)[0],
-             m = tape.param.at(3623)[0];
-  EXPECT_EQ(ref - first, 2);
-  // The home line is Y = 50, Z = 0 now.
-  const double c_ref = correction_mm(100, 50, 0, +1).x();
-  for (long p = first; p <= first + 4; ++p) {
-    long sum = 0;
-    if (p > ref)
-      for (long q = ref + 1; q <= p; ++q) sum += tape.pitch.at(static_cast<int>(q));
-    else
-      for (long q = p + 1; q <= ref; ++q) sum -= tape.pitch.at(static_cast<int>(q));
-    const double x = 50.0 * static_cast<double>(p - first);
-    EXPECT_NEAR(static_cast<double>(sum * m), (correction_mm(x, 50, 0, +1).x() - c_ref) * 1e3,
-                0.5 * static_cast<double>(m) + 1e-6)
-        << "point " << p;
-  }
-  EXPECT_EQ(tape.param.at(3620)[1] - tape.param.at(3621)[1], 1);  // Y reference at its middle node
-}
-
-TEST(ExportFanuc, LatticeHoldsTheCorrectionVectorsInDetectionUnits) {
-  const std::string text =
-      file_named(export_table(small_table(), "fanuc", with_errors()), "fanuc_3d.csv").text;
-  std::istringstream in(text);
-  std::string line;
-  int rows = 0;
   while (std::getline(in, line)) {
-    if (line[0] == '#' || line[0] == 'i') continue;
-    std::vector<double> r;
-    std::istringstream l(line);
-    std::string cell;
-    while (std::getline(l, cell, ',')) r.push_back(std::stod(cell));
-    ASSERT_EQ(r.size(), 9u);
-    const Eigen::Vector3d du_um =
-        0.5 * (correction_mm(r[3], r[4], r[5], +1) + correction_mm(r[3], r[4], r[5], -1)) * 1e3;
-    for (int c = 0; c < 3; ++c)
-      EXPECT_NEAR(r[static_cast<size_t>(6 + c)], du_um[c], 0.5 + 1e-6) << line;
-    ++rows;
+    if (line.size() < 6 || line[0] != 'N' || line[1] != '0') continue;
+    std::array<std::string, 3> v;
+    for (int a = 0; a < 3; ++a) {
+      const size_t at = line.find(fmt::format("A{}P", a + 1)) + 3;
+      v[static_cast<size_t>(a)] = line.substr(at, line.find('A', at) - at);
+    }
+    out[std::stoi(line.substr(1, 5))] = v;
   }
-  EXPECT_EQ(rows, 45);
+  return out;
+}
+
+std::string pitch_tape(const ExportOptions& o, const VolumetricTable& t = small_table()) {
+  return file_named(export_table(t, "fanuc", o), "fanuc_pitch.txt").text;
+}
+
+TEST(ExportFanuc, PointNumbersFollowFanucsFormula) {
+  // Home X = 100 on a 0..200 travel, 50 mm interval: FANUC's formula
+  // 3621 = 3620 - (100 / 50) + 1, 3622 = 3620 + 100 / 50.
+  ExportOptions o;
+  o.home = {100.0, 50.0, 0.0};
+  const auto p = fanuc_parameters(pitch_tape(o));
+  const long ref = std::stol(p.at(3620)[0]);
+  EXPECT_EQ(std::stol(p.at(3621)[0]), ref - 2 + 1);
+  EXPECT_EQ(std::stol(p.at(3622)[0]), ref + 2);
+  EXPECT_EQ(std::stol(p.at(3621)[0]), 0);
+  // X bidirectional: its negative-direction points are 3000 + the positive ones.
+  EXPECT_EQ(p.at(3626)[0], "3000");
+  EXPECT_EQ(p.at(3626)[1], "0");
+  // Y (home 50 of 0..100) follows X's 4 points: 3621 = 4 = 3620 - 50 / 50 + 1.
+  EXPECT_EQ(p.at(3621)[1], "4");
+  EXPECT_EQ(p.at(3620)[1], "4");
+  // A reference position at the travel start: FANUC's rotary example puts
+  // the reference point's own (zero) section in, 3621 = 3620.
+  const auto q = fanuc_parameters(pitch_tape({}));
+  EXPECT_EQ(q.at(3621)[0], q.at(3620)[0]);
+}
+
+TEST(ExportFanuc, TheSeriesSetsTheRecordFormUnitsAndLimits) {
+  ExportOptions o;
+  const std::string t30 = pitch_tape(o);
+  EXPECT_NE(t30.find("\nN03624Q1A1P50.0000A2P50.0000A3P50.0000\n"), std::string::npos) << t30;
+  EXPECT_NE(t30.find("\nN10000Q1P0\n"), std::string::npos);
+  o.fanuc.series = FanucOptions::Series::k16i;
+  o.fanuc.input_increment_mm = 0.0001;  // IS-C: 3624 in 0.1 um
+  const std::string t16 = pitch_tape(o);
+  EXPECT_NE(t16.find("\nN03624A1P500000A2P500000A3P500000\n"), std::string::npos) << t16;
+  EXPECT_EQ(t16.find("Q1"), std::string::npos);
+  // 16i: -7..7 per point and 1024 points; 30i: -128..127 and 1536.
+  const VolumetricTable fine = build_table(small_model(), {0.125, 50, 50});  // X: 1600 points
+  for (auto [series, points] : {std::pair{FanucOptions::Series::k16i, "1024"},
+                                std::pair{FanucOptions::Series::k30i, "1536"}}) {
+    o.fanuc.series = series;
+    o.fanuc.input_increment_mm = 0.001;
+    try {
+      export_table(fine, "fanuc", o);
+      ADD_FAILURE() << points;
+    } catch (const ExportError& e) {
+      EXPECT_NE(std::string(e.what()).find(points), std::string::npos) << e.what();
+    }
+  }
+  // A 0.1 um detection unit: X's error rises by about 3.1 um over the first
+  // 50 mm (EXX 2.00 -> 5.10 um), 30-31 units, which needs magnification 5 on
+  // the 16i series (31 / 7 > 4) and 1 on the 30i series.
+  o.detection_unit_mm = 1e-4;
+  o.fanuc.series = FanucOptions::Series::k16i;
+  EXPECT_EQ(fanuc_parameters(pitch_tape(o)).at(3623)[0], "5");
+  o.fanuc.series = FanucOptions::Series::k30i;
+  EXPECT_EQ(fanuc_parameters(pitch_tape(o)).at(3623)[0], "1");
+  EXPECT_EQ(parse_fanuc_series("0i-F"), FanucOptions::Series::k30i);
+  EXPECT_EQ(parse_fanuc_series("18i"), FanucOptions::Series::k16i);
+  EXPECT_THROW(parse_fanuc_series("0i"), std::invalid_argument);
+}
+
+TEST(ExportFanuc, Parameter3605KeepsTheMachinesOtherBits) {
+  ExportOptions o;
+  EXPECT_EQ(pitch_tape(o).find("N03605"), std::string::npos);  // not written without the value
+  EXPECT_NE(file_named(export_table(small_table(), "fanuc", o), "FANUC.txt")
+                .text.find("set bit 0 (BDPx) by hand to A1 1, A2 0, A3 0"),
+            std::string::npos);
+  o.fanuc.param_3605 = {"10100100"};
+  EXPECT_NE(pitch_tape(o).find("\nN03605Q1A1P10100101A2P10100100A3P10100100\n"), std::string::npos);
+  o.fanuc.param_3605 = {"00000010", "00000011", "10000000"};
+  EXPECT_NE(pitch_tape(o).find("\nN03605Q1A1P00000011A2P00000010A3P10000000\n"), std::string::npos);
+  o.fanuc.param_3605 = {"1010010"};
+  EXPECT_THROW(pitch_tape(o), ExportError);
 }
 
 TEST(ExportFanuc, LimitsAreEnforced) {
   ExportOptions o;
-  // More than 1024 points: X 801 x 2 directions + Y 3 + Z 3.
-  const VolumetricTable fine = build_table(small_model(), {0.25, 50, 50});
-  try {
-    export_table(fine, "fanuc", o);
-    FAIL();
-  } catch (const ExportError& e) {
-    EXPECT_NE(std::string(e.what()).find("1024"), std::string::npos) << e.what();
-  }
-  // +-7 x magnification 100 per point: with a 0.001 um detection unit a
-  // 50 mm interval changes by thousands of units.
-  o.detection_unit_mm = 1e-6;
+  // With a 0.0001 um detection unit a 50 mm interval changes by 31000
+  // units, more than -128..127 x magnification 100.
+  o.detection_unit_mm = 1e-7;
   EXPECT_THROW(export_table(small_table(), "fanuc", o), ExportError);
   // The interval must be a whole number of detection units.
   o.detection_unit_mm = 0.003;
   EXPECT_THROW(export_table(small_table(), "fanuc", o), ExportError);
   // Equidistant points only.
   EXPECT_THROW(export_table(build_table(small_model(), {30, 50, 50}), "fanuc"), ExportError);
+  // The reference position must be a compensation point (a grid node).
+  o = {};
+  o.home = {120.0, 0.0, 0.0};
+  try {
+    export_table(small_table(), "fanuc", o);
+    FAIL();
+  } catch (const ExportError& e) {
+    EXPECT_NE(std::string(e.what()).find("reference position 120 mm is not a node"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(ExportIsgCsv, ValuesAreTheComponentErrorsInMillimetresAndRadians) {
