@@ -15,6 +15,7 @@
 #include "core/model/machine_json.h"
 #include "maps/exports/exporters.h"
 #include "maps/tables/table_builder.h"
+#include "tests/maps/component_controller_model.h"
 #include "tests/maps/controller_models.h"
 #include "tests/maps/export_fixture.h"
 #include "tests/maps/fanuc_controller_model.h"
@@ -321,6 +322,51 @@ TEST(ControllerModelFanuc, ThreeDimensionalCompensationCorrectsTheWholeVolume) {
   }
   EXPECT_LE(excess, 0.5e-3 + 1e-6) << "worst residual " << worst;
   EXPECT_GT(worst, 0.0);
+}
+
+// ---- controls that take the component errors: ISG CSV, KinematicsComp ----
+
+// The control's model fed with what it read commands the axes; the real
+// machine (both X directions: the files carry the mean) moves to the
+// wanted position within the rounding of the file's numbers.
+double component_control_worst(const ComponentErrors& read) {
+  const ErrorModel control(small_model().machine(), as_error_set(read));
+  double worst = 0.0;
+  for (const Eigen::Vector3d& p : volume_points()) {
+    const Eigen::Vector3d c = exact_command(control, p, 0);
+    const Eigen::Vector3d r =
+        0.5 * ((actual_tip(small_model(), c, +1) - p) + (actual_tip(small_model(), c, -1) - p));
+    worst = std::max(worst, r.cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
+TEST(ControllerModelComponentErrors, IsgCsvReadAsTheKernelReadsItCorrectsTheWholeVolume) {
+  const ComponentErrors read =
+      read_isg_csv(export_table(small_table(), "isg-csv", with_errors())[0].text);
+  EXPECT_EQ(read.axes.size(), 3u);
+  EXPECT_EQ(read.location.size(), 3u);
+  EXPECT_LE(component_control_worst(read), 1e-6);
+  // The check can fail: the same file with every angle read as degrees.
+  ComponentErrors degrees = read;
+  for (auto& [k, rows] : degrees.axes)
+    for (auto& [pos, v] : rows)
+      for (int c = 3; c < 6; ++c) v[static_cast<size_t>(c)] *= M_PI / 180.0;
+  EXPECT_GT(component_control_worst(degrees), 1e-4);
+}
+
+TEST(ControllerModelComponentErrors, KinematicsCompTablesCorrectTheWholeVolume) {
+  const std::vector<ExportFile> files = export_table(small_table(), "heidenhain", with_errors());
+  const ComponentErrors read = read_kinematics_comp({{'X', file_named(files, "KC_X.COM").text},
+                                                     {'Y', file_named(files, "KC_Y.COM").text},
+                                                     {'Z', file_named(files, "KC_Z.COM").text}},
+                                                    file_named(files, "HEIDENHAIN.txt").text);
+  EXPECT_EQ(read.location.size(), 3u);
+  // 8 decimals of a degree: 1.7e-10 rad, times levers of a few 100 mm.
+  EXPECT_LE(component_control_worst(read), 1e-6);
+  ComponentErrors no_location = read;
+  no_location.location.clear();
+  EXPECT_GT(component_control_worst(no_location), 1e-3);
 }
 
 // ---- HEIDENHAIN nonlinear axis error compensation ----
