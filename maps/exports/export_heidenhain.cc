@@ -80,7 +80,7 @@ std::string tnc_table(const std::string& begin, const std::vector<std::string>& 
 // ISG-style name of a location error for the notes: EC0X stays EC0X.
 std::string location_line(const std::string& name, double value) {
   const bool angular = name.size() > 1 && (name[1] == 'A' || name[1] == 'B' || name[1] == 'C');
-  return angular ? fmt::format("  {} = {} deg ({} urad)\n", name,
+  return angular ? fmt::format("  {} = {} deg ({} µrad)\n", name,
                                signed_fixed(value * 180.0 / M_PI, 8), fixed(value * 1e6, 3))
                  : fmt::format("  {} = {} mm\n", name, signed_fixed(value, 6));
 }
