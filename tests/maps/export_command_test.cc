@@ -96,6 +96,22 @@ TEST(ExportCommand, MapThenExportWritesTheFiles) {
           (dir / "fanuc").string());
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_TRUE(fs::exists(dir / "fanuc" / "fanuc_pitch.txt"));
+  EXPECT_TRUE(fs::exists(dir / "fanuc" / "fanuc_3d_transcription.csv"));  // 30i by default
+  // The FANUC options reach the tape: the series' record form, the merged 3605.
+  r = run("export --table " + table +
+          " --format fanuc --fanuc-series 0i-D --fanuc-param-3605 01000000 "
+          "--fanuc-reference-direction - -o " +
+          (dir / "fanuc16").string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const std::string tape = read_file(dir / "fanuc16" / "fanuc_pitch.txt");
+  EXPECT_NE(tape.find("\nN03605A1P01000001A2P01000000A3P01000000\n"), std::string::npos) << tape;
+  EXPECT_FALSE(fs::exists(dir / "fanuc16" / "fanuc_3d_transcription.csv"));
+  EXPECT_NE(read_file(dir / "fanuc16" / "FANUC.txt").find("1006#5 ZMI = 1"), std::string::npos);
+  r = run("export --table " + table + " --format fanuc --fanuc-series 0i -o " +
+          (dir / "fanuc0i").string());
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("0i-D and 0i-F differ"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "fanuc0i"));
   r = run("export --table " + table + " --format csv -o " + table);
   EXPECT_EQ(r.status, 1) << r.out;
   r = run("map --machine " + machine + " --errors " + errors + " --spacing 50,50,50 -o " + errors);
