@@ -79,7 +79,9 @@ std::vector<ExportFile> siemens_lec(const VolumetricTable& t, const ExportOption
       ";   mm (a positive value moves the axis negative; K3: zero at the reference point)\n"
       "; load with MD32700 $MA_ENC_COMP_ENABLE[0,AXn]=0, then set it to 1 (the table becomes\n"
       ";   write-protected) and POWER ON; MD38000 $MA_MM_ENC_COMP_MAX_POINTS[0,AXn] >= the\n"
-      ";   points of the axis\n";
+      ";   points of the axis\n"
+      "; not confirmed by a Siemens source, check on the control: MD38000's upper limit\n"
+      ";   (volmap allows 5000 points per axis)\n";
   text += "CHANDATA(1)\n";
   for (int j = 0; j < 3; ++j) {
     const GridAxis& g = t.grid[static_cast<size_t>(j)];
@@ -145,7 +147,11 @@ std::vector<ExportFile> siemens_cec(const VolumetricTable& t, const ExportOption
   text +=
       "; values: correction added to the output axis setpoint, mm, zero at the home node\n"
       "; load with MD32710 $MA_CEC_ENABLE[AXn]=0 on the output axes, then set it to 1 and\n"
-      ";   POWER ON; SD41300 $SN_CEC_TABLE_ENABLE[t]=1 (set below) enables each table\n";
+      ";   POWER ON; SD41300 $SN_CEC_TABLE_ENABLE[t]=1 (set below) enables each table\n"
+      "; not confirmed by a Siemens source, check on the control: the limits volmap allows\n"
+      ";   (2000 points per table, 62 tables); the sign, derived from K3 (the table's output\n"
+      ";   is an additional setpoint of the output axis): a one-point test table of +0.010\n"
+      ";   must move the output axis by +0.010 mm\n";
   text += "CHANDATA(1)\n";
   std::string sizes, enables;
   int table = 0;
