@@ -207,7 +207,9 @@ struct SiemensLec {
 inline SiemensLec read_siemens_lec(const SiemensIni& ini) {
   if (ini.program != "%_N_AX_EEC_INI") throw std::runtime_error("not %_N_AX_EEC_INI");
   SiemensLec lec;
-  for (const auto& [index, text] : ini.values.at("$AA_ENC_COMP_STEP")) {
+  for (const auto& entry : ini.values.at("$AA_ENC_COMP_STEP")) {
+    const std::string& index = entry.first;
+    const std::string& text = entry.second;
     const std::string ax = index.substr(index.find(',') + 1);
     const int a = siemens_axis(ax);
     if (ini.number_at("$AA_ENC_COMP_IS_MODULO", index) != 0) throw std::runtime_error("modulo");
@@ -247,7 +249,9 @@ struct SiemensCec {
 inline SiemensCec read_siemens_cec(const SiemensIni& ini) {
   if (ini.program != "%_N_NC_CEC_INI") throw std::runtime_error("not %_N_NC_CEC_INI");
   SiemensCec cec;
-  for (const auto& [index, text] : ini.values.at("$AN_CEC_INPUT_AXIS")) {
+  for (const auto& entry : ini.values.at("$AN_CEC_INPUT_AXIS")) {
+    const std::string& index = entry.first;
+    const std::string& text = entry.second;
     SiemensCec::Table t;
     t.input = siemens_axis(text);
     t.output = siemens_axis(ini.at("$AN_CEC_OUTPUT_AXIS", index));
