@@ -71,7 +71,7 @@ CorrectionOut correction_out(const Machine& m, const CorrectionSolver& corr, con
     const double v = clean(r.du[i] * (rot ? 1e6 : 1e3));
     du[fmt::format("{}_{}", axis_char(a), rot ? "urad" : "um")] = v;
     du_text += fmt::format("{}d{} {:.3f} {}", du_text.empty() ? "" : "  ", axis_char(a), v,
-                           rot ? "urad" : "um");
+                           rot ? "µrad" : "µm");
   }
   const AxisVector corrected = u + r.du;
   out.json = {{"errors", errors_file},
@@ -84,7 +84,7 @@ CorrectionOut correction_out(const Machine& m, const CorrectionSolver& corr, con
               {"residual_axis_urad", clean(r.residual_axis * 1e6)}};
   out.text = fmt::format(
       "Correction ({}, {}): du = -J^-1 dv, dv = actual - nominal{}\n  {}\n  command  {}\n"
-      "  residual tool-tip error {:.6f} um, tool axis {:.6f} urad\n",
+      "  residual tool-tip error {:.6f} µm, tool axis {:.6f} µrad\n",
       errors_file, corr.options().max_iterations > 1 ? "iterated to eq. 4" : "one step, eq. 6",
       r.singular ? " (singular: outer rotary correction suppressed)" : "", du_text,
       axes_text(m, corrected), r.residual_mm * 1e3, r.residual_axis * 1e6);
@@ -93,7 +93,7 @@ CorrectionOut correction_out(const Machine& m, const CorrectionSolver& corr, con
 
 struct KinematicsOptions {
   std::string machine, forward, backward, previous, errors;
-  bool json = false, iterate = false;
+  bool json = false, iterate = false, other_machine_errors = false;
 };
 
 // --forward: the nominal tool pose at an axis position, and the correction
@@ -199,7 +199,8 @@ int run_kinematics(const KinematicsOptions& o) {
   std::optional<ErrorModel> model;
   std::optional<CorrectionSolver> corrector;
   if (!o.errors.empty()) {
-    model.emplace(m, load_errors_csv(o.errors));
+    model.emplace(
+        m, load_errors_for(m, o.machine, o.errors, ErrorsFormat::kVolmap, o.other_machine_errors));
     CorrectionOptions co;
     co.residual = true;
     if (o.iterate) co.max_iterations = 20;
@@ -233,12 +234,13 @@ Runner register_kinematics(CLI::App& app) {
                   "rotary axis at the singular position");
   CLI::Option* err = sub->add_option(
       "--errors", o->errors,
-      "Errors CSV (errors.md): also print the correction du (um, urad) and the corrected axis "
+      "Errors CSV (errors.md): also print the correction du (µm, µrad) and the corrected axis "
       "position for the real machine (Lei & Hsu eq. 4); for --backward, of the selected solution");
   sub->add_flag("--iterate", o->iterate,
                 "With --errors: iterate to the exact solution of eq. 4 instead of the one-step "
                 "du = -J^-1 dv of eq. 6")
       ->needs(err);
+  add_other_machine_flag(*sub, o->other_machine_errors);
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
   sub->footer(
       "Example:\n  volmap kinematics --machine samples/machines/lei-hsu-xyzac.json "

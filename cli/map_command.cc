@@ -18,6 +18,7 @@
 
 #include "cli/commands.h"
 #include "cli/option_checks.h"
+#include "cli/parse_util.h"
 #include "core/model/errors_import.h"
 #include "core/model/machine_json.h"
 #include "maps/tables/factorized_table.h"
@@ -43,8 +44,7 @@ std::vector<double> parse_spacing(const Machine& m, const std::string& text) {
     const auto res = std::from_chars(cell.data(), cell.data() + cell.size(), v);
     if (cell.empty() || res.ec != std::errc() || res.ptr != cell.data() + cell.size() ||
         !(v > 0.0) || !std::isfinite(v))
-      throw std::invalid_argument(
-          fmt::format("--spacing {}: \"{}\" is not a positive number", text, cell));
+      throw UsageError(fmt::format("--spacing {}: \"{}\" is not a positive number", text, cell));
     out.push_back(v);
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -52,9 +52,8 @@ std::vector<double> parse_spacing(const Machine& m, const std::string& text) {
   std::string order;
   for (AxisName a : m.axis_order) order += std::string(order.empty() ? "" : ",") + axis_char(a);
   if (static_cast<int>(out.size()) != m.axis_count())
-    throw std::invalid_argument(
-        fmt::format("--spacing {}: expected {} values ({}, mm and degrees), got {}", text,
-                    m.axis_count(), order, out.size()));
+    throw UsageError(fmt::format("--spacing {}: expected {} values ({}, mm and degrees), got {}",
+                                 text, m.axis_count(), order, out.size()));
   for (int i = 0; i < m.axis_count(); ++i)
     if (is_rotary(m.axis_order[static_cast<size_t>(i)]))
       out[static_cast<size_t>(i)] *= M_PI / 180.0;
@@ -75,7 +74,7 @@ struct MapOptions {
   double tolerance_um = 0.0, tolerance_urad = 0.0, repeatability_um = -1.0,
          repeatability_urad = -1.0, max_table_gib = 2.0;
   int threads = 0;
-  bool json = false;
+  bool json = false, other_machine_errors = false;
 };
 
 // The first keys of the --json summary: what was written, from what.
@@ -212,18 +211,18 @@ void print_table_text(const MapOptions& o, const maps::FullTableResult& r,
                            table.node_count(), table.layer_count(),
                            table.layer_count() > 1 ? "s" : "", layers,
                            static_cast<double>(table.size_bytes()) / (1 << 20));
-  std::cout << fmt::format("  max |dv| {:.3f} um", e.max_dv_um);
-  if (e.max_dq_urad) std::cout << fmt::format(", max |dQ| {:.3f} urad", *e.max_dq_urad);
-  if (e.max_du_um) std::cout << fmt::format(", max |du| {:.3f} um", *e.max_du_um);
+  std::cout << fmt::format("  max |dv| {:.3f} µm", e.max_dv_um);
+  if (e.max_dq_urad) std::cout << fmt::format(", max |dQ| {:.3f} µrad", *e.max_dq_urad);
+  if (e.max_du_um) std::cout << fmt::format(", max |du| {:.3f} µm", *e.max_du_um);
   if (e.max_du_rotary_urad)
-    std::cout << fmt::format(" and {:.3f} urad (rotary axes)", *e.max_du_rotary_urad);
-  if (e.max_u_um) std::cout << fmt::format(", max uncertainty u {:.3f} um", *e.max_u_um);
+    std::cout << fmt::format(" and {:.3f} µrad (rotary axes)", *e.max_du_rotary_urad);
+  if (e.max_u_um) std::cout << fmt::format(", max uncertainty u {:.3f} µm", *e.max_u_um);
   std::cout << "\n";
   std::cout << fmt::format(
-      "  interpolation error ({}) max {:.4f} um{} over {} cell centres and random points per "
+      "  interpolation error ({}) max {:.4f} µm{} over {} cell centres and random points per "
       "layer\n",
       maps::interpolation_name(r.method), r.interpolation_um(),
-      table.tolerance_um > 0.0 ? fmt::format(" (tolerance {:g} um)", table.tolerance_um) : "",
+      table.tolerance_um > 0.0 ? fmt::format(" (tolerance {:g} µm)", table.tolerance_um) : "",
       r.checked.points);
 }
 
@@ -234,13 +233,13 @@ void print_correction_text(const MapOptions& o, const maps::FullTableResult& r, 
   const bool five = r.table.pose_correction();
   if (r.table.channel("ei"))
     std::cout << fmt::format(
-        "  interpolation error of dQ max {:.4f} urad{}\n", checked.max_dq_urad,
-        r.tolerance_urad > 0.0 ? fmt::format(" (tolerance {:g} urad)", r.tolerance_urad) : "");
+        "  interpolation error of dQ max {:.4f} µrad{}\n", checked.max_dq_urad,
+        r.tolerance_urad > 0.0 ? fmt::format(" (tolerance {:g} µrad)", r.tolerance_urad) : "");
   if (five)
     std::cout << fmt::format(
-        "  interpolation error of du max {:.4f} um, {:.4f} urad (rotary), {} check points near "
+        "  interpolation error of du max {:.4f} µm, {:.4f} µrad (rotary), {} check points near "
         "the singular position not compared; {} nodes at the singular position (outer axis's "
-        "correction suppressed), correction residual max {:.2g} um\n",
+        "correction suppressed), correction residual max {:.2g} µm\n",
         checked.max_du_um, checked.max_du_rot_urad, checked.du_excluded,
         summary.correction_singular, summary.correction_max_residual_mm * 1e3);
   if (summary.correction_clamped > 0 && five)
@@ -281,7 +280,7 @@ int run_full(const MapOptions& o, const ErrorModel& model,
   const maps::FullTableJob job = full_table_job(o, m, threads, uncertainty, bar);
   const bool searching = bar && job.spacing.empty();
   if (searching)
-    std::cerr << "map: searching the spacing for " << job.tolerance_um_or_default() << " um..."
+    std::cerr << "map: searching the spacing for " << job.tolerance_um_or_default() << " µm..."
               << std::flush;
   const maps::FullTableResult r = maps::build_full_table(model, job);
   if (searching) std::cerr << "\r" << std::string(60, ' ') << "\r" << std::flush;
@@ -315,7 +314,8 @@ int run_map(const MapOptions& o) {
   const Machine m = load_machine_json(o.machine);
   const Formulation f =
       o.model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
-  ErrorSet errors = load_errors(o.errors, parse_errors_format(o.errors_format));
+  ErrorSet errors = load_errors_for(m, o.machine, o.errors, parse_errors_format(o.errors_format),
+                                    o.other_machine_errors);
   const maps::UncertaintySources uncertainty = maps::uncertainty_sources(
       errors, o.repeatability_um, o.repeatability_urad, o.covariance, m, f);
   if (o.tolerance_urad > 0.0 && !m.has_rotary_axes())
@@ -339,6 +339,7 @@ Runner register_map(CLI::App& app) {
   sub->add_option("--errors", o->errors,
                   "Errors file: errors.md CSV, ISG CSV or Etalon exchange format")
       ->required();
+  add_other_machine_flag(*sub, o->other_machine_errors);
   sub->add_option("--errors-format", o->errors_format,
                   "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv "
                   "(Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
@@ -350,12 +351,12 @@ Runner register_map(CLI::App& app) {
   CLI::Option* tol_um = sub->add_option(
       "--tolerance-um", o->tolerance_um,
       "Automatic spacing: the coarsest grid whose interpolation error of the tool-tip error "
-      "(and of the three-axis correction) against the model stays below this (um; default 1 "
+      "(and of the three-axis correction) against the model stays below this (µm; default 1 "
       "without --spacing)");
   tol_um->check(kFinitePositive)->excludes(spacing);
   sub->add_option("--tolerance-urad", o->tolerance_urad,
                   "Automatic spacing, machines with rotary axes: the same bound for the tool-axis "
-                  "error dQ (urad; default 1 without --spacing)")
+                  "error dQ (µrad; default 1 without --spacing)")
       ->check(kFinitePositive)
       ->excludes(spacing);
   sub->add_option("--max-table-gib", o->max_table_gib,
@@ -384,12 +385,12 @@ Runner register_map(CLI::App& app) {
                   "SVG, no network)");
   sub->add_option(
          "--repeatability-um", o->repeatability_um,
-         "Standard uncertainty of every translational error of the errors file, um (default: "
+         "Standard uncertainty of every translational error of the errors file, µm (default: "
          "its '# repeatability_um:' metadata); adds the per-node uncertainty u")
       ->check(kFiniteNonNegative);
   sub->add_option(
          "--repeatability-urad", o->repeatability_urad,
-         "Standard uncertainty of every angular error, urad (default: '# repeatability_urad:')")
+         "Standard uncertainty of every angular error, µrad (default: '# repeatability_urad:')")
       ->check(kFiniteNonNegative);
   sub->add_option("--covariance", o->covariance,
                   "volmap identify --json report: propagate the covariance of the identified "

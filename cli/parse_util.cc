@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "core/model/errors_machine.h"
 
 namespace volmap::cli {
 
@@ -55,6 +56,19 @@ AxisVector parse_axis_position(const Machine& m, const std::string& text,
 
 double display_position(AxisName a, double value) {
   return is_rotary(a) ? value * 180.0 / M_PI : value;
+}
+
+void add_other_machine_flag(CLI::App& sub, bool& flag) {
+  sub.add_flag(kOtherMachineErrors, flag,
+               "Use errors whose '# machine:' line names another machine (default: refuse, "
+               "since errors of another machine give a wrong correction)");
+}
+
+ErrorSet load_errors_for(const Machine& m, const std::string& machine_path,
+                         const std::string& errors_path, ErrorsFormat format, bool other_machine) {
+  ErrorSet e = load_errors(errors_path, format);
+  if (!other_machine) require_errors_of_machine(e, m, machine_path, kOtherMachineErrors);
+  return e;
 }
 
 }  // namespace volmap::cli

@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/five_axis_options.h"
+#include "cli/parse_util.h"
 #include "cli/program_setup.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
@@ -88,14 +89,17 @@ int run_five_axis(const Opts& o, const Machine& m) {
     const maps::VolumetricTable t = maps::load_table(o.table);
     r = post::post_five_axis(*in, in_name, out.stream(), m, t, opt);
   } else {
-    r = post::post_five_axis(*in, in_name, out.stream(), m,
-                             load_errors(o.errors, parse_errors_format(o.errors_format)), opt);
+    r = post::post_five_axis(
+        *in, in_name, out.stream(), m,
+        load_errors_for(m, o.machine, o.errors, parse_errors_format(o.errors_format),
+                        o.other_machine_errors),
+        opt);
   }
   out.commit();
   if (isatty(2))
     std::cerr << fmt::format(
         "five-axis ({} input): {} lines, {} moves, {} poses ({} singular), {} lines added, "
-        "max correction {:.2f} um / {:.2f} urad\n",
+        "max correction {:.2f} µm / {:.2f} µrad\n",
         post::input_form_name(r.form), r.lines, r.moves, r.poses, r.singular_poses, r.lines_added,
         r.max_correction_mm * 1e3, r.max_correction_rad * 1e6);
   return 0;
@@ -134,11 +138,8 @@ Runner register_post(CLI::App& app) {
     FiveAxisCliOptions five;
     double tolerance_um = 1.0;
     int decimals = -1;
-    bool clamp = false;
-    bool expand_cycles = false;
-    bool keep_arcs = false;
-    bool linearize_arcs = false;
-    bool json = false;
+    bool clamp = false, expand_cycles = false, keep_arcs = false, linearize_arcs = false;
+    bool json = false, other_machine_errors = false;
     std::string report;
   };
   auto o = std::make_shared<Opts>();
@@ -152,6 +153,7 @@ Runner register_post(CLI::App& app) {
                   "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv "
                   "(Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
       ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
+  add_other_machine_flag(*sub, o->other_machine_errors);
   auto* table = sub->add_option("--table", o->table,
                                 "Compensation table (volmap map) instead of --errors (three-axis: "
                                 "the machine file's tool only)");
@@ -201,7 +203,8 @@ Runner register_post(CLI::App& app) {
         throw InputError(o->table, 0, bad.what());
       }
     } else {
-      e = load_errors(o->errors, parse_errors_format(o->errors_format));
+      e = load_errors_for(m, o->machine, o->errors, parse_errors_format(o->errors_format),
+                          o->other_machine_errors);
     }
     const nc::ProgramSetup setup = o->placement.load(m);
     post::PostOptions opt;

@@ -36,7 +36,7 @@ nlohmann::ordered_json um3(const Eigen::Vector3d& v) {
 
 struct SensitivityOptions {
   std::string machine, errors, at, model = "independent";
-  bool json = false;
+  bool json = false, other_machine_errors = false;
 };
 
 /// The gains at u and, with --errors, the model and each error's value.
@@ -94,7 +94,7 @@ void print_sensitivity_text(const SensitivityOptions& o, const SensitivityResult
   std::cout << fmt::format("{:<6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>7}", "error", "dx", "dy",
                            "dz", "di", "dj", "dk");
   if (r.model)
-    std::cout << fmt::format(" | {:>9} {:>8} {:>8} {:>8}", "value", "dx um", "dy um", "dz um");
+    std::cout << fmt::format(" | {:>11} {:>8} {:>8} {:>8}", "value", "dx µm", "dy µm", "dz µm");
   std::cout << "\n";
   for (size_t k = 0; k < r.gains.size(); ++k) {
     const ErrorGain& e = r.gains[k];
@@ -103,8 +103,8 @@ void print_sensitivity_text(const SensitivityOptions& o, const SensitivityResult
                              clean(e.dQ.x()), clean(e.dQ.y()), clean(e.dQ.z()));
     if (r.model) {
       const Eigen::Vector3d d = contribution_um(r.gains[k], r.values[k]);
-      std::cout << fmt::format(" | {:>6.2f} {:<2} {:>8.3f} {:>8.3f} {:>8.3f}",
-                               clean(display_value(e, r.values[k])), e.angular ? "ur" : "um",
+      std::cout << fmt::format(" | {:>6.2f} {:<4} {:>8.3f} {:>8.3f} {:>8.3f}",
+                               clean(display_value(e, r.values[k])), e.angular ? "µrad" : "µm",
                                clean(d.x()), clean(d.y()), clean(d.z()));
     }
     std::cout << "\n";
@@ -113,10 +113,10 @@ void print_sensitivity_text(const SensitivityOptions& o, const SensitivityResult
     const PoseError fo = r.model->first_order(r.u), ex = r.model->exact(r.u);
     std::cout << fmt::format(
         "\nTool-tip error at {} (workpiece coordinates, actual - nominal):\n"
-        "  first order  dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um\n"
-        "  exact HTM    dx {:8.3f} um  dy {:8.3f} um  dz {:8.3f} um  |dP| {:.3f} um\n"
-        "  tool axis    di {:8.3f} ur  dj {:8.3f} ur  dk {:8.3f} ur\n"
-        "(value: um for translational errors, ur = urad for angular ones; mean of both\n"
+        "  first order  dx {:8.3f} µm  dy {:8.3f} µm  dz {:8.3f} µm\n"
+        "  exact HTM    dx {:8.3f} µm  dy {:8.3f} µm  dz {:8.3f} µm  |dP| {:.3f} µm\n"
+        "  tool axis    di {:8.3f} µrad  dj {:8.3f} µrad  dk {:8.3f} µrad\n"
+        "(value: µm for translational errors, µrad for angular ones; mean of both\n"
         " directions for bidirectional tables)\n",
         o.at, clean(fo.dP_mm.x() * units::kUmPerMm), clean(fo.dP_mm.y() * units::kUmPerMm),
         clean(fo.dP_mm.z() * units::kUmPerMm), clean(ex.dP_mm.x() * units::kUmPerMm),
@@ -142,6 +142,7 @@ Runner register_sensitivity(CLI::App& app) {
   sub->add_option("--errors", o->errors,
                   "Errors CSV (errors.md): adds each error's value and its contribution "
                   "to the tool-tip error at --at, and the total (first order and exact)");
+  add_other_machine_flag(*sub, o->other_machine_errors);
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
   sub->footer(
       "Example:\n  volmap sensitivity --machine samples/machines/hsu-3axis.json "
@@ -155,7 +156,10 @@ Runner register_sensitivity(CLI::App& app) {
     SensitivityResult r{m, u, error_gains(m, f, u), std::nullopt, {}};
     // With --errors: value of each error at u and its contribution (um).
     if (!o->errors.empty()) {
-      r.model.emplace(m, load_errors_csv(o->errors), ModelOptions{f, OutsidePolicy::kError});
+      r.model.emplace(
+          m,
+          load_errors_for(m, o->machine, o->errors, ErrorsFormat::kVolmap, o->other_machine_errors),
+          ModelOptions{f, OutsidePolicy::kError});
       r.values = error_values(m, r.model->errors(), u, OutsidePolicy::kError);
     }
     if (o->json) {

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/parse_util.h"
 #include "core/common/atomic_file.h"
 #include "core/measure/effects.h"
 #include "core/measure/plan.h"
@@ -18,6 +19,7 @@ namespace {
 Runner register_simulate(CLI::App& app) {
   struct Opts {
     std::string machine, errors, effects, plan, output;
+    bool other_machine_errors = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand(
@@ -28,6 +30,7 @@ Runner register_simulate(CLI::App& app) {
       ->required();
   sub->add_option("--errors", o->errors, "Component and location errors CSV (errors.md)")
       ->required();
+  add_other_machine_flag(*sub, o->other_machine_errors);
   sub->add_option("--effects", o->effects,
                   "Effects beyond the geometric model (JSON volmap-effects/1, docs/simulate.md)");
   sub->add_option("--plan", o->plan, "Measurement plan (JSON volmap-plan/1, docs/simulate.md)")
@@ -43,7 +46,8 @@ Runner register_simulate(CLI::App& app) {
     if (!o->effects.empty()) inputs.push_back(o->effects);
     refuse_output_equal_to_input(o->output, inputs);
     const Machine m = load_machine_json(o->machine);
-    const ErrorModel model(m, load_errors_csv(o->errors));
+    const ErrorModel model(m, load_errors_for(m, o->machine, o->errors, ErrorsFormat::kVolmap,
+                                              o->other_machine_errors));
     const Plan plan = load_plan_json(o->plan, m);
     std::unique_ptr<EffectSet> effects;
     if (!o->effects.empty()) {

@@ -9,6 +9,7 @@
 #include "cli/commands.h"
 #include "cli/five_axis_options.h"
 #include "cli/option_checks.h"
+#include "cli/parse_util.h"
 #include "cli/program_setup.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
@@ -68,7 +69,7 @@ int verdict(const Opts& o, const Stats& before, const Stats& after) {
   if (o.tolerance_um > 0) {
     if (!(after.max_um > o.tolerance_um)) return 0;
     std::cerr << fmt::format(
-        "volmap: {}: the actual tool path leaves the tolerance: max {:.3f} um from the nominal "
+        "volmap: {}: the actual tool path leaves the tolerance: max {:.3f} µm from the nominal "
         "path (at line {}), more than --tolerance-um {:g}\n",
         o.program, after.max_um, after.worst_line, o.tolerance_um);
     return 3;
@@ -76,7 +77,7 @@ int verdict(const Opts& o, const Stats& before, const Stats& after) {
   if (after.max_um > before.max_um)
     std::cerr << fmt::format(
         "volmap: warning: {} deviates more from the nominal path than the uncompensated {} "
-        "({:.3f} um against {:.3f} um): were post and verify given the same machine, errors and "
+        "({:.3f} µm against {:.3f} µm): were post and verify given the same machine, errors and "
         "placement (--work-offset, --part-origin)?\n",
         o.program, o.nominal, after.max_um, before.max_um);
   return 0;
@@ -117,10 +118,10 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
   }
   std::cout << fmt::format(
       "deviation of the actual tool pose from the nominal path (five axes, feed moves)\n"
-      "  before (nominal program, ideal TCP, uncompensated): tip max {:8.3f} um rms {:8.3f} um, "
-      "axis max {:8.2f} urad rms {:8.2f} urad ({} samples, worst at line {})\n"
-      "  after  (compensated machine-axis program):          tip max {:8.3f} um rms {:8.3f} um, "
-      "axis max {:8.2f} urad rms {:8.2f} urad ({} samples, worst at line {})\n",
+      "  before (nominal program, ideal TCP, uncompensated): tip max {:8.3f} µm rms {:8.3f} µm, "
+      "axis max {:8.2f} µrad rms {:8.2f} µrad ({} samples, worst at line {})\n"
+      "  after  (compensated machine-axis program):          tip max {:8.3f} µm rms {:8.3f} µm, "
+      "axis max {:8.2f} µrad rms {:8.2f} µrad ({} samples, worst at line {})\n",
       r.before.max_um, r.before.rms_um, r.before.max_urad, r.before.rms_urad, r.before.samples,
       r.before.worst_line, r.after.max_um, r.after.rms_um, r.after.max_urad, r.after.rms_urad,
       r.after.samples, r.after.worst_line);
@@ -134,7 +135,7 @@ Runner register_verify(CLI::App& app) {
     FiveAxisCliOptions five;
     double step_mm = 0.25;
     double tolerance_um = 0.0;  ///< 0: not given
-    bool json = false, clamp = false;
+    bool json = false, clamp = false, other_machine_errors = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* sub =
@@ -145,6 +146,7 @@ Runner register_verify(CLI::App& app) {
   sub->add_option("--errors", o->errors,
                   "Errors file: errors.md CSV, ISG CSV or Etalon exchange format")
       ->required();
+  add_other_machine_flag(*sub, o->other_machine_errors);
   sub->add_option("--errors-format", o->errors_format,
                   "Format of --errors: auto (default: detected), volmap (errors.md), isg-csv "
                   "(Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
@@ -162,7 +164,7 @@ Runner register_verify(CLI::App& app) {
                 "Hold the end value of an error table outside it (default: refuse)");
   sub->add_option("--tolerance-um", o->tolerance_um,
                   "Exit with status 3 (one line on stderr) when the compensated program's actual "
-                  "tool path is farther than this from the nominal path (um; the tip on five "
+                  "tool path is farther than this from the nominal path (µm; the tip on five "
                   "axes). Without it, a warning when it is farther than the uncompensated one")
       ->check(kFinitePositive);
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
@@ -180,7 +182,8 @@ Runner register_verify(CLI::App& app) {
       "(the same machine, errors and placement as the post that wrote the program)");
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
-    const ErrorSet e = load_errors(o->errors, parse_errors_format(o->errors_format));
+    const ErrorSet e = load_errors_for(
+        m, o->machine, o->errors, parse_errors_format(o->errors_format), o->other_machine_errors);
     if (o->five.applies(m)) return run_five_axis(*o, o->five.place_part(m), e);
     const nc::ProgramSetup setup = o->placement.load(m);
     const std::unique_ptr<AtomicOutput> report = open_report(*o);
@@ -209,9 +212,9 @@ Runner register_verify(CLI::App& app) {
     }
     std::cout << fmt::format(
         "deviation of the actual tool path from the nominal one (feed moves)\n"
-        "  before (nominal program, uncompensated): max {:8.3f} um  rms {:8.3f} um  ({} samples, "
+        "  before (nominal program, uncompensated): max {:8.3f} µm  rms {:8.3f} µm  ({} samples, "
         "worst at line {})\n"
-        "  after  (compensated program):           max {:8.3f} um  rms {:8.3f} um  ({} samples, "
+        "  after  (compensated program):           max {:8.3f} µm  rms {:8.3f} µm  ({} samples, "
         "worst at line {})\n",
         r.before.max_um, r.before.rms_um, r.before.samples, r.before.worst_line, r.after.max_um,
         r.after.rms_um, r.after.samples, r.after.worst_line);

@@ -75,6 +75,7 @@ struct AxisErrors {
 struct ErrorSet {
   std::string file;                                            ///< as named on input
   std::map<std::string, std::string> metadata;                 ///< "# key: value" lines
+  std::map<std::string, int> metadata_line;                    ///< their line numbers
   std::array<std::optional<AxisErrors>, kAxisNameCount> axis;  ///< by AxisName
   /// Location errors by canonical name ("EC0X"), mm or rad.
   std::map<std::string, double> location;

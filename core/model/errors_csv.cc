@@ -84,7 +84,7 @@ class Reader {
     std::string text;
     while (lines.next(text)) {
       if (csv::is_comment(text)) {
-        if (!seen_block) read_metadata(text);
+        if (!seen_block) read_metadata(text, lines.number());
         continue;
       }
       if (csv::is_blank(text)) {
@@ -108,10 +108,11 @@ class Reader {
     throw InputError(file_, line, column, message);
   }
 
-  void read_metadata(std::string_view text) {
+  void read_metadata(std::string_view text, int line) {
     const std::optional<csv::MetadataComment> entry = csv::parse_metadata_comment(csv::trim(text));
     if (!entry) return;
     set_.metadata[std::string(entry->key)] = std::string(entry->value);
+    set_.metadata_line[std::string(entry->key)] = line;
   }
 
   void read_block(const std::vector<Line>& block) {

@@ -195,3 +195,31 @@ TEST(Cli, ExportRefusesAnErrorsFileItCannotFind) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(dir / "b" / "KC_X.COM"));
 }
+
+// Errors whose '# machine:' names another machine are refused by every
+// command that takes a machine and errors, naming both; --other-machine-errors
+// uses them anyway. The same errors under their own machine's name pass.
+TEST(Cli, ErrorsOfAnotherMachineAreRefusedUnlessAskedFor) {
+  const std::string other = "tests/bad/errors/machine-other.csv";
+  const std::string m = "--machine samples/machines/hsu-3axis.json --errors ";
+  for (const std::string& args :
+       {"kinematics " + m + other + " --forward 100,100,100",
+        "sensitivity " + m + other + " --at 100,100,100",
+        "post " + m + other + " --work-offset 250,200,100 samples/programs/pocket.ngc -o -"}) {
+    const Result r = volmap::test::run_volmap_in_source(args);
+    EXPECT_EQ(r.status, 1) << args;
+    EXPECT_EQ(r.err,
+              "volmap: " + other +
+                  ":2: '# machine:' names \"samples/machines/gantry-3axis.json\", but the machine "
+                  "is \"hsu-3axis\" (samples/machines/hsu-3axis.json): errors measured on another "
+                  "machine give a wrong correction; give this machine's errors, or "
+                  "--other-machine-errors to use them anyway\n")
+        << args;
+    EXPECT_EQ(volmap::test::run_volmap_in_source(args + " --other-machine-errors").status, 0)
+        << args;
+  }
+  EXPECT_EQ(volmap::test::run_volmap_in_source("kinematics " + m +
+                                               "samples/errors/hsu-3axis.csv --forward 100,100,100")
+                .status,
+            0);
+}
