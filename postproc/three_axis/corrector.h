@@ -101,6 +101,11 @@ class Corrector {
   /// |e(c0 + t (c1 - c0)) - ((1 - t) e(c0) + t e(c1))| <= K |c1 - c0|^2 / 8,
   /// or +infinity when c0 or c1 lies outside the box.
   double chord_deviation_bound(const Eigen::Vector3d& c0, const Eigen::Vector3d& c1) const;
+  /// The machine's axis positions where the controlled point p (machine
+  /// frame) stands with this tool (tool length compensation moves the axes).
+  Eigen::Vector3d axis_position(const Eigen::Vector3d& p_machine_mm) const {
+    return p_machine_mm + axis_shift_mm_;
+  }
   /// True when the machine has no errors at all (the output must equal the input).
   bool zero() const { return zero_; }
 

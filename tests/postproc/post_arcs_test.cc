@@ -145,19 +145,56 @@ TEST(PostArcs, CutWhereTheFieldNeedsItLinearisedWhereInverseTimeWould) {
 }
 
 TEST(PostArcs, LinearisedArcOfTooManyPiecesIsRefusedAtItsLine) {
-  // A circle of radius 1 000 km (a centre far off): --linearize-arcs would
-  // need more than 65 536 pieces (the tables held at their ends, --clamp).
-  std::istringstream in("G21 G90 G17 G54\nG0 X10 Y10 Z20\nG2 X10 Y10 I1000000 J0 F100\nM2\n");
+  // A circle of radius 100 mm at a tolerance of 0.01 nm: --linearize-arcs
+  // would need about 220 000 chords, more than 65 536 pieces.
+  std::istringstream in("G21 G90 G17 G54\nG0 X-50 Y0 Z20\nG2 X-50 Y0 I100 J0 F100\nM2\n");
   std::ostringstream out;
   post::PostOptions o;
   o.keep_arcs = false;
-  o.outside = OutsidePolicy::kClamp;
+  o.tolerance_mm = 1e-8;
   try {
-    post::post_program(in, "far.ngc", out, hsu(), hsu_errors(), offset_setup(100, 100, 100), o);
+    post::post_program(in, "tight.ngc", out, hsu(), hsu_errors(), offset_setup(200, 200, 100), o);
     ADD_FAILURE() << "written";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("far.ngc:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("tight.ngc:3"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("more than 65536 pieces"), std::string::npos) << e.what();
+  }
+}
+
+// Every commanded position is checked against the machine's travel, --clamp
+// or not, and the message says first what is likely wrong: a circle of
+// radius 1 000 km (a centre far off) leaves the 500 mm travel of X on its
+// way round; the end point alone lies inside.
+TEST(PostArcs, AnArcThatLeavesTheTravelIsRefusedAtItsLine) {
+  for (bool clamp : {false, true}) {
+    std::istringstream in("G21 G90 G17 G54\nG0 X10 Y10 Z20\nG2 X10 Y10 I1000000 J0 F100\nM2\n");
+    std::ostringstream out;
+    post::PostOptions o;
+    o.outside = clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
+    try {
+      post::post_program(in, "far.ngc", out, hsu(), hsu_errors(), offset_setup(100, 100, 100), o);
+      ADD_FAILURE() << "written";
+    } catch (const InputError& e) {
+      EXPECT_EQ(
+          std::string(e.what()),
+          "far.ngc:3: this block moves X to 2000110.0000 mm, outside its travel 0..500 mm "
+          "(machine hsu-3axis); the program lies outside the travel at its origin 100,100,100 "
+          "mm (--work-offset, G10, G92): check the work offset");
+    }
+  }
+  // No work offset: the program's coordinates are the machine's.
+  std::istringstream in("G21 G90 G17 G54\nG0 X10 Y10 Z20\nG1 X-5 F100\nM2\n");
+  std::ostringstream out;
+  try {
+    post::post_program(in, "raw.ngc", out, hsu(), hsu_errors(), {}, {});
+    ADD_FAILURE() << "written";
+  } catch (const InputError& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("raw.ngc:3: this block moves X to -5.0000 mm, outside its "
+                                   "travel 0..500 mm (machine hsu-3axis); the program's origin "
+                                   "is the machine's zero"),
+        std::string::npos)
+        << e.what();
   }
 }
 
