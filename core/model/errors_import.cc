@@ -109,9 +109,12 @@ const char* errors_format_name(ErrorsFormat f) {
   return "?";
 }
 
-ErrorsFormat detect_errors_format(const std::string& text) {
-  bool slash_comments = false;
+ErrorsFormat detect_errors_format(const std::string& text, int* ambiguous_line) {
+  if (ambiguous_line) *ambiguous_line = 0;
+  bool slash_comments = false, hash_comments = false;
+  int n = 0;
   for (const std::string& raw : csv::split_lines(text)) {
+    ++n;
     const size_t b = raw.find_first_not_of(" \t");
     if (b == std::string::npos) continue;
     if (raw.compare(b, 2, "//") == 0) {
@@ -120,11 +123,22 @@ ErrorsFormat detect_errors_format(const std::string& text) {
     }
     if (raw[b] == '#') {
       if (slash_comments) return ErrorsFormat::kIsgCsv;  // an ISG block break
-      continue;                                          // a volmap comment
+      hash_comments = true;                              // a volmap comment
+      continue;
     }
     if (raw[b] == '[') return ErrorsFormat::kEtalon;
-    if (slash_comments || raw.find(',') == std::string::npos) return ErrorsFormat::kIsgCsv;
-    return ErrorsFormat::kVolmap;
+    if (slash_comments) return ErrorsFormat::kIsgCsv;
+    if (raw.find(',') != std::string::npos) return ErrorsFormat::kVolmap;
+    // No comma: ISG's blank- or tab-separated header, unless it is one name
+    // alone (a one-column location block, "EC0X"), which both formats
+    // write alike with values 1e6 apart. Comments with # before it say
+    // errors.md; otherwise nothing tells them apart.
+    const size_t e = raw.find_last_not_of(" \t\r");
+    const bool one_token = raw.find_first_of(" \t;", b) > e;
+    if (!one_token) return ErrorsFormat::kIsgCsv;
+    if (hash_comments) return ErrorsFormat::kVolmap;
+    if (ambiguous_line) *ambiguous_line = n;
+    return ErrorsFormat::kIsgCsv;
   }
   return slash_comments ? ErrorsFormat::kIsgCsv : ErrorsFormat::kVolmap;
 }
@@ -271,7 +285,15 @@ std::string etalon_to_errors_csv(const std::string& text, const std::string& fil
 
 ErrorSet read_errors(std::istream& in, const std::string& file, ErrorsFormat format) {
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (format == ErrorsFormat::kAuto) format = detect_errors_format(text);
+  if (format == ErrorsFormat::kAuto) {
+    int ambiguous = 0;
+    format = detect_errors_format(text, &ambiguous);
+    if (ambiguous > 0)
+      throw InputError(file, ambiguous,
+                       "a block of one column and no comment before it: errors.md (µm, µrad) "
+                       "and ISG CSV (mm, rad) write it alike, with values a million times apart; "
+                       "give `errors_format` volmap or isg-csv");
+  }
   if (format == ErrorsFormat::kVolmap) {
     std::istringstream s(text);
     return read_errors_csv(s, file);

@@ -35,9 +35,12 @@ ErrorsFormat parse_errors_format(const std::string& name);
 const char* errors_format_name(ErrorsFormat f);
 
 /// Detection from the text: the first line that is neither blank nor a
-/// comment starts with "[" -> Etalon; a first such line without a comma
-/// (blank- or tab-separated header), or "//" comments -> ISG CSV; else volmap.
-ErrorsFormat detect_errors_format(const std::string& text);
+/// comment starts with "[" -> Etalon; "//" comments, or a first such line
+/// without a comma (blank- or tab-separated header) -> ISG CSV; else volmap.
+/// A first line of one name alone ("EC0X", a one-column location block)
+/// without "#" comments before it is either format: *ambiguous_line is then
+/// its line number (else 0), and read_errors refuses it under kAuto.
+ErrorsFormat detect_errors_format(const std::string& text, int* ambiguous_line = nullptr);
 
 /// Translation into errors.md text; line_of[i] is the original line of the
 /// translated line i + 1 (0: none). Throws InputError for structural

@@ -274,7 +274,7 @@ std::vector<BadCase> bad_cases() {
       BadCase{"bad_dir.csv", 4, {"dir", "'0'", "+1", "-1"}},
       BadCase{"wrong_cell_count.csv", 3, {"2 cells", "header (line 1) has 3"}},
       BadCase{"duplicate_name.csv", 5, {"duplicate error name EXX", "line 1"}},
-      BadCase{"duplicate_location.csv", 4, {"duplicate error name EC0X", "line 1"}},
+      BadCase{"duplicate_location.csv", 5, {"duplicate error name EC0X", "line 2"}},
       BadCase{"duplicate_column.csv", 1, {"duplicate column EXX"}},
       BadCase{"duplicate_dir.csv", 1, {"duplicate column dir"}},
       BadCase{"location_two_rows.csv", 3, {"exactly one data row"}},

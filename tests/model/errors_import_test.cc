@@ -94,6 +94,22 @@ TEST(ErrorsImport, VolmapFilesAreDetectedAsVolmap) {
   EXPECT_EQ(detect_errors_format("# volmap component errors v1\nX,EXX\n0,1\n"),
             ErrorsFormat::kVolmap);
   EXPECT_EQ(detect_errors_format("X,EXX\n0,1\n"), ErrorsFormat::kVolmap);
+  // One name alone: errors.md and ISG CSV write a one-column location
+  // block alike (values 1e6 apart); a # comment before it says errors.md,
+  // nothing else tells them apart, and read_errors refuses it.
+  int ambiguous = -1;
+  EXPECT_EQ(detect_errors_format("# volmap component errors v1\nEC0X\n12.0\n", &ambiguous),
+            ErrorsFormat::kVolmap);
+  EXPECT_EQ(ambiguous, 0);
+  detect_errors_format("\nEC0X\n12.0\n", &ambiguous);
+  EXPECT_EQ(ambiguous, 2);
+  EXPECT_EQ(detect_errors_format("X EXX\n0 1\n", &ambiguous), ErrorsFormat::kIsgCsv);
+  EXPECT_EQ(ambiguous, 0);
+  std::istringstream one("EC0X\n12.0\n");
+  EXPECT_THROW(read_errors(one, "one.csv"), InputError);
+  std::istringstream told("EC0X\n12.0\n");
+  EXPECT_NEAR(read_errors(told, "one.csv", ErrorsFormat::kVolmap).location.at("EC0X"), 12e-6,
+              1e-18);
   EXPECT_EQ(parse_errors_format("etalon"), ErrorsFormat::kEtalon);
   EXPECT_THROW(parse_errors_format("xls"), std::invalid_argument);
 }
