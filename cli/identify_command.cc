@@ -98,17 +98,17 @@ Runner register_identify(CLI::App& app) {
         degree = std::stoi(c.substr(colon + 1), &used);
         if (used != c.size() - colon - 1) throw std::invalid_argument("");
       } catch (const std::exception&) {
-        throw std::invalid_argument(
-            fmt::format("--component {}: expected NAME:DEGREE, e.g. EXX:3", c));
+        throw UsageError(fmt::format("--component {}: expected NAME:DEGREE, e.g. EXX:3", c));
       }
       opt.components.push_back({c.substr(0, colon), degree});
     }
     const IdentifyResult res = identify_naming_flags(m, rec, opt);
     std::map<std::string, std::string> meta{
         {"machine", o->machine},
-        {"source", fmt::format("volmap identify from {} ({} observations, rms residual {:.6f} um)",
+        {"source", fmt::format("volmap identify from {} ({} observations, rms residual {:.6f} µm)",
                                o->recordings, res.equations, res.rms_after_um)}};
     if (!o->known.empty()) meta["known"] = o->known;
+    if (!res.warnings.empty()) meta["warning"] = res.warnings.front();
     AtomicOutput out(o->output, inputs);
     write_identified_errors_csv(out.stream(), res, meta, known_text);
     out.commit();
@@ -119,6 +119,8 @@ Runner register_identify(CLI::App& app) {
       doc["recordings"] = o->recordings;
       doc["output"] = o->output;
       report << doc.dump(2) << "\n";
+      // The JSON carries them; a script that reads only the status sees them here.
+      for (const std::string& w : res.warnings) std::cerr << "volmap: warning: " << w << "\n";
     } else {
       report << identify_report_text(res);
       if (o->output != "-") report << "\nWritten: " << o->output << "\n";

@@ -187,6 +187,8 @@ Eigen::MatrixXd covariance_and_correlations(const EstimatedSet& est, const Eigen
 void report_parameters(const std::vector<ParameterColumn>& cols, const Identifiability& id,
                        const EstimatedSet& est, const Eigen::VectorXd& theta,
                        const Eigen::MatrixXd& cov, int dof, IdentifyResult& res) {
+  const Eigen::MatrixXd cov_s = est.ldlt.solve(Eigen::MatrixXd::Identity(
+      static_cast<Eigen::Index>(est.kept.size()), static_cast<Eigen::Index>(est.kept.size())));
   const std::vector<int>& kept = est.kept;
   for (int j = 0; j < static_cast<int>(cols.size()); ++j) {
     IdentifiedParameter p = cols[static_cast<std::size_t>(j)].p;
@@ -197,6 +199,7 @@ void report_parameters(const std::vector<ParameterColumn>& cols, const Identifia
       const auto a =
           static_cast<Eigen::Index>(std::find(kept.begin(), kept.end(), j) - kept.begin());
       if (dof > 0) p.std_error = std::sqrt(std::max(cov(a, a), 0.0));
+      p.inflation = std::sqrt(std::max(cov_s(a, a) * est.normal(a, a), 0.0));
     }
     res.parameters.push_back(p);
     if (p.identifiable && p.kind == ParameterKind::kLocation)
@@ -282,6 +285,13 @@ IdentifyResult identify(const Machine& m, const Recordings& rec, const IdentifyO
       covariance_and_correlations(est, D, cols, opt.strong_correlation, res);
   report_parameters(cols, id, est, theta, cov, dof, res);
   report_curves(m, base, opt.known, cols, gains.names(), id, theta, res);
+  if (const auto it = rec.metadata.find("noise_um"); it != rec.metadata.end()) {
+    char* end = nullptr;
+    const double v = std::strtod(it->second.c_str(), &end);
+    if (end != it->second.c_str() && *end == '\0' && v > 0 && std::isfinite(v))
+      res.stated_noise_um = v;
+  }
+  res.warnings = identification::fit_warnings(res, dof);
   return res;
 }
 

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -81,6 +82,10 @@ struct IdentifiedParameter {
   bool identifiable = true;
   double estimate = 0.0;   ///< unit; 0 when not identifiable (fixed)
   double std_error = 0.0;  ///< unit; NaN when not identifiable or no redundancy
+  /// Variance inflation: the standard error over the one the parameter would
+  /// have if its column were uncorrelated with the others' (sqrt of the VIF);
+  /// NaN when not estimated.
+  double inflation = std::nan("");
 };
 
 /// A combination of parameters the recording cannot separate: changing
@@ -124,6 +129,13 @@ struct IdentifyResult {
   bool converged = false;
   std::vector<FittedCurve> curves;
   std::vector<std::pair<std::string, double>> location_estimates;  ///< identifiable, mm / rad
+  /// The noise the recording states ("# noise_um:" metadata, as volmap
+  /// simulate writes it), NaN when it states none.
+  double stated_noise_um = std::nan("");
+  /// What makes the estimates doubtful, one sentence each (docs/identify.md,
+  /// "Fit quality"): a residual sigma well above the stated noise, a fit
+  /// that removes little, parameters barely identifiable.
+  std::vector<std::string> warnings;
 };
 
 /// Identifies the errors. Throws InputError (recordings file:line) for an
@@ -140,6 +152,12 @@ IdentifyResult identify(const Machine& m, const Recordings& rec, const IdentifyO
 void write_identified_errors_csv(std::ostream& out, const IdentifyResult& result,
                                  const std::map<std::string, std::string>& metadata,
                                  const std::string& known_text);
+
+namespace identification {
+/// IdentifyResult::warnings for a finished fit with `dof` degrees of
+/// freedom (docs/identify.md, "Fit quality").
+std::vector<std::string> fit_warnings(const IdentifyResult& r, int dof);
+}  // namespace identification
 
 /// The report as JSON (format "volmap-identify/1", docs/identify.md) and text.
 nlohmann::ordered_json identify_report_json(const IdentifyResult& result);

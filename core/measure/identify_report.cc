@@ -141,6 +141,8 @@ nlohmann::ordered_json identify_report_json(const IdentifyResult& r) {
   doc["rms_before_um"] = r.rms_before_um;
   doc["rms_after_um"] = r.rms_after_um;
   doc["sigma_um"] = number_or_null(r.sigma_um);
+  doc["stated_noise_um"] = number_or_null(r.stated_noise_um);
+  doc["warnings"] = r.warnings;
   nlohmann::ordered_json params = nlohmann::ordered_json::array();
   for (const IdentifiedParameter& p : r.parameters) {
     const char* kind = p.kind == ParameterKind::kLocation    ? "location"
@@ -152,7 +154,8 @@ nlohmann::ordered_json identify_report_json(const IdentifyResult& r) {
                       {"status", p.identifiable ? "estimated" : "not_identifiable"},
                       {"estimate", p.identifiable ? number_or_null(p.estimate)
                                                   : nlohmann::ordered_json(nullptr)},
-                      {"std_error", number_or_null(p.std_error)}});
+                      {"std_error", number_or_null(p.std_error)},
+                      {"inflation", number_or_null(p.inflation)}});
   }
   doc["parameters"] = params;
   nlohmann::ordered_json un = nlohmann::ordered_json::array();
@@ -187,14 +190,19 @@ std::string identify_report_text(const IdentifyResult& r) {
       "{:.4g}\n",
       r.equations, r.rows_used, r.parameters.size(), r.rank, r.condition_number);
   s += fmt::format(
-      "RMS residual {:.4g} um before, {:.4g} um after ({} Gauss-Newton iterations{}); sigma {:.4g} "
-      "um\n\n",
+      "RMS residual {:.4g} µm before, {:.4g} µm after ({} Gauss-Newton iterations{}); sigma {:.4g} "
+      "µm\n\n",
       r.rms_before_um, r.rms_after_um, r.iterations, r.converged ? "" : ", NOT converged",
       r.sigma_um);
+  for (const std::string& w : r.warnings) s += "WARNING, " + w + "\n";
+  if (!r.warnings.empty()) s += "\n";
   s += fmt::format("{:<16} {:>14} {:>12}  {}\n", "parameter", "estimate", "std error", "");
   for (const IdentifiedParameter& p : r.parameters) {
     if (p.identifiable)
-      s += fmt::format("{:<16} {:>11.4f} {:<4} {:>10.4f}\n", p.name, p.estimate, p.unit,
+      s += fmt::format("{:<16} {:>11.4f} {:<4} {:>10.4f}\n", p.name, p.estimate,
+                       p.unit == "um"     ? "µm"
+                       : p.unit == "urad" ? "µrad"
+                                          : p.unit,
                        p.std_error);
     else
       s += fmt::format("{:<16} {:>16} {:>10}  not identifiable: fixed at 0\n", p.name, "-", "-");
@@ -213,4 +221,49 @@ std::string identify_report_text(const IdentifyResult& r) {
   return s;
 }
 
+namespace identification {
+
+// Fit quality. A residual sigma above the noise the recording states, by
+// more than sampling explains (sigma^2 / noise^2 is chi^2_dof / dof under a
+// right model: its standard deviation is sqrt(2 / dof); four of those, and
+// at least 20 %), means the parameters cannot reproduce what the machine
+// does, and their estimates and standard errors follow the misfit. Without a
+// stated noise, a fit that removes less than half the RMS says the same.
+// A parameter whose standard error is more than 10 times the one it would
+// have uncorrelated (variance inflation above 100) is barely identifiable.
+std::vector<std::string> fit_warnings(const IdentifyResult& r, int dof) {
+  std::vector<std::string> w;
+  if (std::isfinite(r.stated_noise_um) && dof > 0 && std::isfinite(r.sigma_um)) {
+    const double ratio = r.sigma_um / r.stated_noise_um;
+    if (ratio > 1.2 && ratio * ratio > 1.0 + 4.0 * std::sqrt(2.0 / dof))
+      w.push_back(fmt::format(
+          "poor fit: the residual sigma {:.3g} µm is {:.1f} times the noise the recording states "
+          "({:.3g} µm): the parameters cannot reproduce what the machine does (component errors "
+          "left out of --params, an effect beyond geometry: volmap explain, or another machine "
+          "file), so the estimates and their standard errors are not to be trusted",
+          r.sigma_um, ratio, r.stated_noise_um));
+  } else if (r.rms_before_um > 0 && r.rms_after_um > 0.5 * r.rms_before_um) {
+    w.push_back(fmt::format(
+        "poor fit: the fit removes only {:.0f} % of the RMS residual ({:.3g} -> {:.3g} µm): the "
+        "parameters cannot reproduce most of what the recording shows",
+        100.0 * (1.0 - r.rms_after_um / r.rms_before_um), r.rms_before_um, r.rms_after_um));
+  }
+  std::string barely;
+  for (const IdentifiedParameter& p : r.parameters)
+    if (p.identifiable && std::isfinite(p.inflation) && p.inflation > 10.0)
+      barely += fmt::format("{}{} ({:.0f}x)", barely.empty() ? "" : ", ", p.name, p.inflation);
+  if (!barely.empty())
+    w.push_back(fmt::format(
+        "barely identifiable: {}: each standard error is that many times what it would be were "
+        "the parameter not correlated with the others{}; add observations that move them apart "
+        "(docs/identify.md, the remedies)",
+        barely,
+        r.strong_correlations.empty()
+            ? std::string()
+            : fmt::format(" (strongest: {} with {}, rho {:.2f})", r.strong_correlations[0].a,
+                          r.strong_correlations[0].b, r.strong_correlations[0].rho)));
+  return w;
+}
+
+}  // namespace identification
 }  // namespace volmap
