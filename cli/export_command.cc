@@ -2,6 +2,7 @@
 // a controller (docs/exports.md) into a folder.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -33,7 +34,9 @@ Runner register_export(CLI::App& app) {
       "export", "Writes a table (volmap map) for people or a controller (docs/exports.md)");
   sub->add_option("--table", o->table, "Table file written by volmap map")->required();
   sub->add_option("--format", o->format, "Format: " + formats)->required();
-  sub->add_option("-o,--output", o->output, "Folder to write the files into (created when missing)")
+  sub->add_option("-o,--output", o->output,
+                  "Folder to write the files into (created when missing); - writes an export "
+                  "of one file to standard output")
       ->required();
   sub->add_option("--machine", o->machine,
                   "Machine definition: its home position picks the line of one-dimensional "
@@ -48,7 +51,7 @@ Runner register_export(CLI::App& app) {
                   "(Beckhoff/ISG CSV), etalon (Etalon exchange format, Vendor variant)")
       ->check(CLI::IsMember({"auto", "volmap", "isg-csv", "etalon"}));
   sub->add_option("--detection-unit-um", o->detection_unit_um,
-                  "fanuc: detection unit of the axes, um (default 1); compensation values are "
+                  "fanuc: detection unit of the axes, µm (default 1); compensation values are "
                   "integers in it")
       ->check(CLI::PositiveNumber);
   sub->add_option("--fanuc-series", o->fanuc_series,
@@ -63,7 +66,7 @@ Runner register_export(CLI::App& app) {
                   "fanuc: reference position return direction, + (1006#5 ZMI = 0, default) or -")
       ->check(CLI::IsMember({"+", "-"}));
   sub->add_option("--input-increment-um", o->input_increment_um,
-                  "fanuc, 16i series: least input increment, um (default 1), the unit of 3624")
+                  "fanuc, 16i series: least input increment, µm (default 1), the unit of 3624")
       ->check(CLI::PositiveNumber);
   sub->add_flag("--json", o->json, "Write the list of files as one JSON document to stdout");
   sub->footer(
@@ -71,14 +74,22 @@ Runner register_export(CLI::App& app) {
       "  volmap export --table hsu.vmt --format heidenhain --errors samples/errors/hsu-3axis.csv "
       "-o tnc/");
 
-  return [o]() -> int {
+  return [o, formats]() -> int {
+    const auto& known = maps::export_formats();
+    if (std::find(known.begin(), known.end(), o->format) == known.end())
+      throw UsageError(
+          fmt::format("--format {}: unknown format; the formats are {}", o->format, formats));
     refuse_output_equal_to_input(o->output, {o->table, o->machine, o->errors},
                                  maps::kOutputWording);
     const maps::VolumetricTable table = maps::load_table(o->table);
     maps::ExportOptions options;
     if (!o->machine.empty()) options.home = maps::export_home(o->machine, table, o->table);
     options.detection_unit_mm = o->detection_unit_um * 1e-3;
-    options.fanuc.series = maps::parse_fanuc_series(o->fanuc_series);
+    try {
+      options.fanuc.series = maps::parse_fanuc_series(o->fanuc_series);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--fanuc-series: ") + e.what());
+    }
     options.fanuc.param_3605 = o->param_3605;
     options.fanuc.reference_direction = o->reference_direction == "-" ? -1 : +1;
     options.fanuc.input_increment_mm = o->input_increment_um * 1e-3;
@@ -91,6 +102,20 @@ Runner register_export(CLI::App& app) {
       files = maps::export_table(table, o->format, options);
     } catch (const maps::ExportError& e) {
       throw std::invalid_argument(fmt::format("{}: {}", o->table, e.what()));
+    }
+    if (o->output == "-") {
+      // -o - writes standard output (cli.md): an export of one file only.
+      if (files.size() != 1) {
+        std::string names;
+        for (const maps::ExportFile& f : files) names += (names.empty() ? "" : ", ") + f.name;
+        throw UsageError(fmt::format(
+            "-o -: the {} export writes {} files ({}); standard output takes one: give a folder",
+            o->format, files.size(), names));
+      }
+      if (o->json)
+        throw UsageError("-o -: the export goes to standard output; --json would mix with it");
+      std::cout << files.front().text;
+      return 0;
     }
     maps::write_export(o->output, files);
     if (o->json) {

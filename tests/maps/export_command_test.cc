@@ -109,7 +109,7 @@ TEST(ExportCommand, MapThenExportWritesTheFiles) {
   EXPECT_NE(read_file(dir / "fanuc16" / "FANUC.txt").find("1006#5 ZMI = 1"), std::string::npos);
   r = run("export --table " + table + " --format fanuc --fanuc-series 0i -o " +
           (dir / "fanuc0i").string());
-  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_EQ(r.status, 2) << r.out;  // a usage error
   EXPECT_NE(r.out.find("0i-D and 0i-F differ"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir / "fanuc0i"));
   r = run("export --table " + table + " --format csv -o " + table);
@@ -123,7 +123,20 @@ TEST(ExportCommand, MapThenExportWritesTheFiles) {
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.out.find("bad.vmt"), std::string::npos) << r.out;
   r = run("map --machine " + machine + " --errors " + errors + " --spacing 50,50 -o " + table);
-  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.status, 2);  // a usage error
+  // -o - writes an export of one file to standard output, and refuses more.
+  r = run("export --table " + table + " --format siemens-lec -o -");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.rfind("%_N_AX_EEC_INI\n", 0), 0u) << r.out;
+  EXPECT_FALSE(fs::exists("-"));
+  r = run("export --table " + table + " --format linuxcnc -o -");
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_NE(r.out.find("writes 4 files (X.comp, Y.comp, Z.comp, linuxcnc-joints.ini)"),
+            std::string::npos)
+      << r.out;
+  r = run("export --table " + table + " --format nosuch -o " + (dir / "n").string());
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "n"));
   fs::remove_all(dir);
 }
 
