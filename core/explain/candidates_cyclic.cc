@@ -55,7 +55,7 @@ void add_cyclic_candidate(const CandidateContext& c, AxisName k, const Eigen::Ve
     f.std_errors = {{"period_mm", period_se}, {"amplitude_um", amp_se}};
     f.explanation = fmt::format(
         "{0} deviates periodically along {0} with a period of {1:.4g} mm and an amplitude "
-        "of {2:.3g} um: "
+        "of {2:.3g} µm: "
         "a screw-pitch or scale/encoder interpolation error, which a smooth polynomial "
         "cannot follow.",
         axis_letter(k), period_mm, amp);

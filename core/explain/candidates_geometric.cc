@@ -53,9 +53,9 @@ Candidate linear_error_candidate(const Observations& obs, AxisName k, int comp,
       f.std_errors.push_back({"quadratic_um", std::sqrt(cov(1, 1))});
       f.std_errors.push_back({"cubic_um", std::sqrt(cov(2, 2))});
       f.explanation = fmt::format(
-          "The positioning error {} of {} is missing from the baseline: {:.3g} um per m of "
+          "The positioning error {} of {} is missing from the baseline: {:.3g} µm per m of "
           "travel (scale), "
-          "with {:.3g} um quadratic and {:.3g} um cubic curvature at the ends of the travel.",
+          "with {:.3g} µm quadratic and {:.3g} µm cubic curvature at the ends of the travel.",
           name, axis_letter(k), beta[0], beta[1], beta[2]);
     } else {
       f.explanation =
@@ -89,7 +89,7 @@ Candidate straightness_candidate(const Observations& obs, AxisName k, const std:
                     {"cubic_um", json_number(beta[1])}};
     f.std_errors = {{"quadratic_um", std::sqrt(cov(0, 0))}, {"cubic_um", std::sqrt(cov(1, 1))}};
     f.explanation = fmt::format(
-        "{} of {} is curved ({:.3g} um quadratic, {:.3g} um cubic at the ends of "
+        "{} of {} is curved ({:.3g} µm quadratic, {:.3g} µm cubic at the ends of "
         "the travel): straightness missing from the baseline.",
         name, axis_letter(k), beta[0], beta[1]);
   };
@@ -110,7 +110,7 @@ Candidate location_squareness_candidate(const Observations& obs, AxisName k,
     report_one_parameter("value_urad", beta, cov, f);
     f.parameters.insert(f.parameters.begin(), {"error", name});
     f.explanation = fmt::format(
-        "The location error {} ({} axis) is missing from the baseline: {:.3g} urad of "
+        "The location error {} ({} axis) is missing from the baseline: {:.3g} µrad of "
         "squareness (a tilt of the "
         "axis's line) fits the residuals.",
         name, axis_letter(k), beta[0]);

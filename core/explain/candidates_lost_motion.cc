@@ -32,8 +32,8 @@ Candidate reversal_candidate(const Observations& obs, AxisName k, const Eigen::V
   };
   rev.report = one_coefficient_report("value_um", [k](double value_um) {
     return fmt::format(
-        "{0} deviates {1:.3g} um {2} when approached from +{0} than from -{0} (reversal value "
-        "B = {3:.3g} um): "
+        "{0} deviates {1:.3g} µm {2} when approached from +{0} than from -{0} (reversal value "
+        "B = {3:.3g} µm): "
         "lost motion (backlash) in the {0} drive, absent from the rigid-body model.",
         axis_letter(k), std::abs(value_um), value_um >= 0 ? "more" : "less", value_um);
   });
@@ -52,7 +52,7 @@ Candidate servo_lag_candidate(const Observations& obs, AxisName k, const Eigen::
   };
   sl.report = one_coefficient_report("um_per_m_min", [k](double um_per_m_min) {
     return fmt::format(
-        "{0} lags {1:.3g} um behind the command per m/min of feed, against the direction of "
+        "{0} lags {1:.3g} µm behind the command per m/min of feed, against the direction of "
         "motion: "
         "servo mismatch / following error, which grows with feed and is absent at "
         "standstill.",

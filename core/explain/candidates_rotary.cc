@@ -56,7 +56,7 @@ Candidate rotary_candidate(const Observations& obs, const std::string& effect, A
 Candidate wobble_candidate(const Observations& obs, AxisName rax, const int (&perp)[2]) {
   Candidate wob = rotary_candidate(
       obs, "rotary_wobble", rax,
-      "The {0} axis tilts by {1:.3g} urad, {2} times per turn: an angle-dependent error "
+      "The {0} axis tilts by {1:.3g} µrad, {2} times per turn: an angle-dependent error "
       "motion "
       "(wobble, ISO 230-7) of the {0} bearing, beyond the constant tilts of the location "
       "errors.");
@@ -74,7 +74,7 @@ Candidate wobble_candidate(const Observations& obs, AxisName rax, const int (&pe
 Candidate positioning_candidate(const Observations& obs, AxisName rax, int own_error) {
   Candidate pos = rotary_candidate(
       obs, "rotary_positioning", rax,
-      "The {0} axis mispositions by {1:.3g} urad, {2} times per turn: an angular positioning "
+      "The {0} axis mispositions by {1:.3g} µrad, {2} times per turn: an angular positioning "
       "error of {0} "
       "(encoder or gear eccentricity) that varies with the angle.");
   pos.build = [&obs, rax, own_error](double order) {

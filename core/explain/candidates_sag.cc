@@ -37,7 +37,7 @@ Candidate sag_candidate(const Observations& obs, AxisName k, AxisName j, double 
                     {"origin", json_number(origin)}};
     f.std_errors = {{"coefficient", std::sqrt(cov(0, 0))}, {"origin", delta_se(g, cov)}};
     f.explanation = fmt::format(
-        "{0} deflects with the square of the {1} position ({2:.3g} um per {3}^2 about {1} = "
+        "{0} deflects with the square of the {1} position ({2:.3g} µm per {3}^2 about {1} = "
         "{4:.4g}): sag under "
         "gravity or load as {1} moves, which the rigid-body errors of {0} cannot produce.",
         axis_letter(k), axis_letter(j), c2, is_rotary(j) ? "deg" : "mm", origin);

@@ -35,7 +35,7 @@ void add_setup_shift_candidate(const CandidateContext& c, AxisName k,
     }
     f.parameters = {{"per_run_um", per_run_um}, {"relative_to", "first run"}};
     f.explanation = fmt::format(
-        "The runs sit at different {0} offsets (up to {1:.3g} um from the first run), constant "
+        "The runs sit at different {0} offsets (up to {1:.3g} µm from the first run), constant "
         "within each "
         "run: the set-up (instrument, ball or fixture) moved between runs.",
         axis_letter(k), largest_um);

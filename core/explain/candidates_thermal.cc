@@ -57,7 +57,7 @@ Candidate settling_candidate(const CandidateContext& c, const DriftForm& form,
     if (kind == "scale") f.parameters.push_back({"reference_length_mm", 1000});
     f.std_errors = {{"amplitude_um", std::sqrt(cov(0, 0))}, {"tau_s", tau_se}};
     f.explanation = fmt::format(
-        "{0} drifts with time, settling to {1:.3g} um{2} with a time constant of {3:.0f} s: "
+        "{0} drifts with time, settling to {1:.3g} µm{2} with a time constant of {3:.0f} s: "
         "thermal "
         "growth of the {0} drive (screw or scale expansion) as the machine warms up.",
         axis_letter(k), beta[0], kind == "scale" ? " per 1000 mm of travel" : "", tau_s);
@@ -89,7 +89,7 @@ Candidate rate_candidate(const Candidate& settle, const DriftForm& form,
     if (form.scale) f.parameters.push_back({"reference_length_mm", 1000});
     f.std_errors = {{"rate_um_per_h", std::sqrt(cov(0, 0))}};
     f.explanation = fmt::format(
-        "{0} drifts steadily by {1:.3g} um per hour{2}: thermal growth that had not settled "
+        "{0} drifts steadily by {1:.3g} µm per hour{2}: thermal growth that had not settled "
         "during the test.",
         axis_letter(form.k), beta[0], form.scale ? " per 1000 mm of travel" : "");
   };
@@ -119,7 +119,7 @@ Candidate temperature_candidate(const NamedColumn& tc, const DriftForm& form,
     if (kind == "scale") f.parameters.push_back({"reference_length_mm", 1000});
     f.std_errors = {{"um_per_k", std::sqrt(cov(0, 0))}};
     f.explanation = fmt::format(
-        "{0} moves {1:.3g} um per kelvin of temp_{2}_c{3}: thermal expansion the rigid-body "
+        "{0} moves {1:.3g} µm per kelvin of temp_{2}_c{3}: thermal expansion the rigid-body "
         "model leaves out.",
         axis_letter(k), beta[0], sensor, kind == "scale" ? " per 1000 mm of travel" : "");
   };

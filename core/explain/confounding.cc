@@ -96,7 +96,7 @@ Confounded same_structure(const Observations& obs, const FittedCandidate& f,
   c.explanation = fmt::format(
       "{} {} and {} {} explain the same structure on this recording (fitted deviations "
       "correlated {:.3f}, "
-      "RMS {:.3g} vs {:.3g} um): the recording cannot tell them apart",
+      "RMS {:.3g} vs {:.3g} µm): the recording cannot tell them apart",
       f.cand->effect, fa, g.cand->effect, ga, rho, rms_of(obs, f.gain.rss),
       rms_of(obs, g.gain.rss));
   if (f.cand->effect == "reversal" || g.cand->effect == "reversal")

@@ -31,8 +31,12 @@ std::string params_text(const Finding& f) {
   return s;
 }
 
-std::string opt_um(const std::optional<double>& v) {
+// A held-out RMS, or n/a (never followed by a unit) when there is none.
+std::string opt_num(const std::optional<double>& v) {
   return v ? fmt::format("{:.3f}", *v) : std::string("n/a");
+}
+std::string opt_um(const std::optional<double>& v) {
+  return v ? fmt::format("{:.3f} µm", *v) : std::string("n/a");
 }
 
 /// One scatter panel: points (x, y), y range shared by the pair of panels.
@@ -89,7 +93,7 @@ std::string svg_panel(const std::string& title, const std::string& xlabel,
                    L - 4, H - B, y_lo);
   s << fmt::format(
       "<text x=\"12\" y=\"{:.0f}\" font-size=\"11\" transform=\"rotate(-90 12 {:.0f})\" "
-      "text-anchor=\"middle\">residual (um)</text>",
+      "text-anchor=\"middle\">residual (µm)</text>",
       (T + H - B) / 2, (T + H - B) / 2);
   s << "</svg>";
   return s.str();
@@ -161,7 +165,7 @@ nlohmann::ordered_json explain_json(const ExplainResult& r) {
 std::string explain_text(const ExplainResult& r) {
   std::ostringstream s;
   s << fmt::format("{}: {} observations in {} run(s)\n", r.recordings_file, r.observations, r.runs);
-  s << fmt::format("baseline: {}\n  rms {:.3f} um, held-out rms {} um\n", r.baseline_description,
+  s << fmt::format("baseline: {}\n  rms {:.3f} µm, held-out rms {}\n", r.baseline_description,
                    r.baseline_rms_um, opt_um(r.baseline_heldout_rms_um));
   if (!r.mismatch.empty()) {
     s << "strongest structure in the residuals:\n";
@@ -173,7 +177,7 @@ std::string explain_text(const ExplainResult& r) {
   for (std::size_t i = 0; i < r.findings.size(); ++i) {
     const Finding& f = r.findings[i];
     s << fmt::format(
-        "{}. {} {}: {}\n   rms {:.3f} -> {:.3f} um, held-out {} -> {} um, delta BIC {:.1f}\n   "
+        "{}. {} {}: {}\n   rms {:.3f} -> {:.3f} µm, held-out {} -> {}, delta BIC {:.1f}\n   "
         "{}\n",
         i + 1, f.effect, f.axis ? std::string(1, axis_char(*f.axis)) : std::string("-"),
         params_text(f), f.rms_before_um, f.rms_after_um, opt_um(f.heldout_rms_before_um),
@@ -186,7 +190,7 @@ std::string explain_text(const ExplainResult& r) {
                      c.axis ? std::string(1, axis_char(*c.axis)) : std::string("-"), c.explanation,
                      c.remedy);
   }
-  s << fmt::format("final: rms {:.3f} um, held-out rms {} um\n", r.final_rms_um,
+  s << fmt::format("final: rms {:.3f} µm, held-out rms {}\n", r.final_rms_um,
                    opt_um(r.final_heldout_rms_um));
   return s.str();
 }
@@ -207,9 +211,8 @@ std::string explain_html(const ExplainResult& r) {
   s << fmt::format("<p>Recording <code>{}</code>: {} observations in {} run(s).</p>\n",
                    html_escape(r.recordings_file), r.observations, r.runs);
   s << fmt::format(
-      "<p>Baseline: {}.<br>RMS {:.3f} um, held-out (leave one run out) {} um. Final: RMS {:.3f} "
-      "um, "
-      "held-out {} um.</p>\n",
+      "<p>Baseline: {}.<br>RMS {:.3f} µm, held-out (leave one run out) {}. Final: RMS {:.3f} "
+      "µm, held-out {}.</p>\n",
       html_escape(r.baseline_description), r.baseline_rms_um, opt_um(r.baseline_heldout_rms_um),
       r.final_rms_um, opt_um(r.final_heldout_rms_um));
   s << "<h2>Summary</h2>\n";
@@ -219,8 +222,8 @@ std::string explain_html(const ExplainResult& r) {
     s << "<table "
          "id=\"summary\">\n<tr><th>#</th><th>effect</th><th>axis</th><th>parameters</th><th>RMS "
          "before "
-         "&rarr; after (um)</th><th>held-out before &rarr; after "
-         "(um)</th><th>&Delta;BIC</th></tr>\n";
+         "&rarr; after (µm)</th><th>held-out before &rarr; after "
+         "(µm)</th><th>&Delta;BIC</th></tr>\n";
     for (std::size_t i = 0; i < r.findings.size(); ++i) {
       const Finding& f = r.findings[i];
       s << fmt::format(
@@ -229,7 +232,7 @@ std::string explain_html(const ExplainResult& r) {
           "{}</td><td>{:.1f}</td></tr>\n",
           i + 1, f.effect, f.axis ? std::string(1, axis_char(*f.axis)) : "-",
           html_escape(params_text(f)), f.rms_before_um, f.rms_after_um,
-          opt_um(f.heldout_rms_before_um), opt_um(f.heldout_rms_after_um), f.delta_bic);
+          opt_num(f.heldout_rms_before_um), opt_num(f.heldout_rms_after_um), f.delta_bic);
     }
     s << "</table>\n";
   }

@@ -103,7 +103,7 @@ void report_shift_or_drift(Finding& f, ExplainResult& res) {
   double largest_um = 0;
   for (const auto& v : per) largest_um = std::max(largest_um, std::abs(v.get<double>()));
   res.notes.push_back(
-      fmt::format("per-run offsets of {} are in the final model (largest {:.3g} um); set-up "
+      fmt::format("per-run offsets of {} are in the final model (largest {:.3g} µm); set-up "
                   "shift or drift, see "
                   "confounded",
                   f.axis ? axis_letter(*f.axis) : std::string("-"), largest_um));

@@ -82,7 +82,7 @@ std::optional<Mismatch> periodic_structure(const std::vector<std::pair<double, d
   const double strength = best / ss_total - 2.0 * std::log(std::max(count, 1)) / n;
   if (strength < 0.05) return std::nullopt;
   return Mismatch{component, reg.name + " (periodic)",
-                  fmt::format("a period of {:.4g} {} along {}: amplitude {:.3g} um", best_period,
+                  fmt::format("a period of {:.4g} {} along {}: amplitude {:.3g} µm", best_period,
                               reg.periodic_unit, reg.name, best_amp),
                   std::min(1.0, strength)};
 }
@@ -178,7 +178,7 @@ std::vector<Regressor> regressors(const Observations& obs) {
     const std::string unit = is_rotary(a) ? "deg" : "mm";
     pos.where = [a, unit](double lo, double hi, double m) {
       return fmt::format(
-          "{} {:.4g}..{:.4g} {}: mean residual {:+.3g} um (the region that departs most)",
+          "{} {:.4g}..{:.4g} {}: mean residual {:+.3g} µm (the region that departs most)",
           axis_letter(a), lo, hi, unit, m);
     };
     if (!is_rotary(a)) pos.periodic_unit = "mm";
@@ -196,7 +196,7 @@ std::vector<Regressor> regressors(const Observations& obs) {
       }
       if (!(plus && minus)) continue;
       dir.where = [a](double lo, double, double m) {
-        return fmt::format("all {} sweeps: approached from {}{}, mean residual {:+.3g} um",
+        return fmt::format("all {} sweeps: approached from {}{}, mean residual {:+.3g} µm",
                            axis_letter(a), lo > 0 ? "+" : "-", axis_letter(a), m);
       };
       regs.push_back(dir);
@@ -210,7 +210,7 @@ std::vector<Regressor> regressors(const Observations& obs) {
       run.value.push_back(rec.run[i] >= 0 ? rec.run[i] : std::nan(""));
     run.where = [&rec](double lo, double, double m) {
       const std::size_t r = static_cast<std::size_t>(lo);
-      return fmt::format("run {}: mean residual {:+.3g} um",
+      return fmt::format("run {}: mean residual {:+.3g} µm",
                          r < rec.run_names.size() ? rec.run_names[r] : "?", m);
     };
     regs.push_back(run);
@@ -222,7 +222,7 @@ std::vector<Regressor> regressors(const Observations& obs) {
     r.name = name;
     r.value = v;
     r.where = [name, unit](double lo, double hi, double m) {
-      return fmt::format("{} {:.4g}..{:.4g} {}: mean residual {:+.3g} um", name, lo, hi, unit, m);
+      return fmt::format("{} {:.4g}..{:.4g} {}: mean residual {:+.3g} µm", name, lo, hi, unit, m);
     };
     regs.push_back(r);
   };

@@ -111,8 +111,8 @@ void read_setup_shift(const JsonObject& o, const Machine& m, Effect& e) {
                v[k][2].is_number()) {
       d = {v[k][0].get<double>(), v[k][1].get<double>(), v[k][2].get<double>()};
     } else {
-      o.fail(p, along_axis ? "expected a number (um along axis) or [x, y, z] (um)"
-                           : "expected [x, y, z] in um (or give \"axis\" and numbers)");
+      o.fail(p, along_axis ? "expected a number (µm along axis) or [x, y, z] (µm)"
+                           : "expected [x, y, z] in µm (or give \"axis\" and numbers)");
     }
     if (!d.allFinite()) o.fail(p, "expected finite numbers");
     e.per_run_um.push_back(d);

@@ -64,7 +64,7 @@ class Expander {
     }
     plan_.noise_um = root.number_or("noise_um", 0.0);
     if (plan_.noise_um < 0)
-      root.fail("noise_um", "expected a number >= 0 (standard deviation in um)");
+      root.fail("noise_um", "expected a number >= 0 (standard deviation in µm)");
     const std::string frame = root.string_or("frame", "workpiece");
     if (frame == "machine") {
       plan_.frame = RecordingFrame::kMachine;

@@ -90,23 +90,23 @@ std::vector<Slice> middle_slices(const VolumetricTable& t) {
 
 std::vector<Panel> panels_of(const VolumetricTable& t) {
   std::vector<Panel> panels;
-  panels.push_back({"ex (um)", {0}, 1e3, false});
-  panels.push_back({"ey (um)", {1}, 1e3, false});
-  panels.push_back({"ez (um)", {2}, 1e3, false});
-  panels.push_back({"|e| (um)", {0, 1, 2}, 1e3, true});
+  panels.push_back({"ex (µm)", {0}, 1e3, false});
+  panels.push_back({"ey (µm)", {1}, 1e3, false});
+  panels.push_back({"ez (µm)", {2}, 1e3, false});
+  panels.push_back({"|e| (µm)", {0, 1, 2}, 1e3, true});
   if (const std::optional<int> ei = t.channel("ei"))
-    panels.push_back({"|tool-axis error| (urad)", {*ei, *ei + 1, *ei + 2}, 1e6, true});
+    panels.push_back({"|tool-axis error| (µrad)", {*ei, *ei + 1, *ei + 2}, 1e6, true});
   if (const std::optional<int> ux = t.channel("ux")) {
-    panels.push_back({"ux (um)", {*ux}, 1e3, false});
-    panels.push_back({"uy (um)", {*ux + 1}, 1e3, false});
-    panels.push_back({"uz (um)", {*ux + 2}, 1e3, false});
+    panels.push_back({"ux (µm)", {*ux}, 1e3, false});
+    panels.push_back({"uy (µm)", {*ux + 1}, 1e3, false});
+    panels.push_back({"uz (µm)", {*ux + 2}, 1e3, false});
   }
   // Five-axis: the rotary axes' corrections (urad).
   for (const char* name : {"ua", "ub", "uc"})
     if (const std::optional<int> c = t.channel(name))
-      panels.push_back({std::string(name) + " (urad)", {*c}, 1e6, false});
+      panels.push_back({std::string(name) + " (µrad)", {*c}, 1e6, false});
   if (const std::optional<int> u = t.channel("u"))
-    panels.push_back({"u, standard uncertainty (um)", {*u}, 1e3, true});
+    panels.push_back({"u, standard uncertainty (µm)", {*u}, 1e3, true});
   return panels;
 }
 
@@ -131,7 +131,7 @@ std::string page_head(const VolumetricTable& t, const ReportInfo& info, int laye
   h += fmt::format("<tr><td>layer shown</td><td>{} ({} of {})</td></tr>\n", layer_name(t, layer),
                    layer + 1, t.layer_count());
   if (info.max_interpolation_um >= 0)
-    h += fmt::format("<tr><td>interpolation error</td><td>{:.4f} um ({})</td></tr>\n",
+    h += fmt::format("<tr><td>interpolation error</td><td>{:.4f} µm ({})</td></tr>\n",
                      info.max_interpolation_um, html_escape(info.interpolation));
   h += "</table>\n";
   h +=
@@ -273,7 +273,7 @@ std::string vector_panel(SlicePlane& plane) {
     }
   h += "</svg>\n";
   h += fmt::format(
-      "<figcaption>in-plane error (e{}, e{}): longest {:.4f} um = one "
+      "<figcaption>in-plane error (e{}, e{}): longest {:.4f} µm = one "
       "cell</figcaption>\n</figure>\n",
       static_cast<char>(axis_char(ga.axis) - 'A' + 'a'),
       static_cast<char>(axis_char(gb.axis) - 'A' + 'a'), emax * 1e3);

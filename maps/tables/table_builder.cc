@@ -356,10 +356,10 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
   const bool rotary = m.has_rotary_axes();
   if (!(tolerance_um > 0.0) || !std::isfinite(tolerance_um))
     throw std::invalid_argument(
-        fmt::format("tolerance {} um is not a positive number", tolerance_um));
+        fmt::format("tolerance {} µm is not a positive number", tolerance_um));
   if (rotary && (!(tolerance_urad > 0.0) || !std::isfinite(tolerance_urad)))
     throw std::invalid_argument(
-        fmt::format("tolerance {} urad is not a positive number", tolerance_urad));
+        fmt::format("tolerance {} µrad is not a positive number", tolerance_urad));
   const std::vector<double>& lin = auto_spacing_sequence();
   const std::vector<double>& rot = auto_rotary_spacing_sequence();
   unsigned rotary_mask = 0;
@@ -388,9 +388,9 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
         std::string what = e.what();
         what = what.substr(0, what.find("; give a coarser"));
         throw TableTooLarge(fmt::format(
-            "automatic spacing for {} um{}: at {} {} (best so far {:.3g} x the tolerance at {}); "
+            "automatic spacing for {} µm{}: at {} {} (best so far {:.3g} x the tolerance at {}); "
             "give `spacing`, or raise the tolerance",
-            tolerance_um, rotary ? fmt::format(" / {} urad", tolerance_urad) : "",
+            tolerance_um, rotary ? fmt::format(" / {} µrad", tolerance_urad) : "",
             spacing_text(m, s_mm, s_deg), what, best, best_at.empty() ? "none" : best_at));
       }
     }
@@ -457,10 +457,10 @@ AutoSpacingResult build_for_tolerance(const ErrorModel& model, double tolerance_
     ri += refine_rotary;
   }
   throw std::invalid_argument(fmt::format(
-      "no spacing down to {} reaches {} um{} with {} interpolation (best: {:.3g} x the tolerance "
+      "no spacing down to {} reaches {} µm{} with {} interpolation (best: {:.3g} x the tolerance "
       "at {}); raise the tolerance or use `interpolation` cubic",
       spacing_text(m, lin.back(), rot.back()), tolerance_um,
-      rotary ? fmt::format(" / {} urad", tolerance_urad) : "", interpolation_name(check.method),
+      rotary ? fmt::format(" / {} µrad", tolerance_urad) : "", interpolation_name(check.method),
       best, best_at));
 }
 

@@ -117,7 +117,7 @@ void AptReader::arc_to(const Eigen::Vector3d& end_mm, const Eigen::Vector3d& axi
   if (!(chords <= kMaxChords))
     fail(
         fmt::format("the arc of CIRCLE/ (line {}), {:.4g} mm about a tilted axis, would take more "
-                    "than {} chords within {:g} um; output it as GOTO points",
+                    "than {} chords within {:g} µm; output it as GOTO points",
                     c.line, r, kMaxChords, chord_mm_ * 1e3));
   const int count = std::max(2, static_cast<int>(chords));
   const Eigen::Vector3d base = c.centre_mm + (s - c.centre_mm).dot(n) * n;

@@ -87,7 +87,7 @@ void FiveAxisPost::segment(const FiveAxisMove& m, std::vector<Piece>& pieces) {
         }
         if (pieces.size() > kMaxPieces)
           fail(fmt::format(
-              "more than {} pieces needed to keep {:g} um and {:g} urad; raise the tolerances",
+              "more than {} pieces needed to keep {:g} µm and {:g} µrad; raise the tolerances",
               kMaxPieces, o_.tolerance_mm * 1e3, o_.angle_tolerance_rad * 1e6));
         u_nom_ = n1.u;
         residual_angle_ = r1;

@@ -33,8 +33,8 @@ std::string post_summary_text(const PostSummaryInfo& info, const PostReport& r) 
   } else {
     s = fmt::format(
         "post: {}: {} in, {} out: {} changed, {} added; arcs: {} kept, {} cut into arcs, {} as "
-        "lines; largest correction {:.2f} um, largest predicted deviation between points "
-        "{:.2f} um (tolerance {:g} um)\n",
+        "lines; largest correction {:.2f} µm, largest predicted deviation between points "
+        "{:.2f} µm (tolerance {:g} µm)\n",
         info.program, plural(r.lines_in, "line", "lines"), r.lines_out, r.lines_changed,
         r.lines_added, r.arcs_kept, r.arcs_split, r.arcs_linearized, r.max_correction_mm * 1e3,
         r.max_deviation_mm * 1e3, info.tolerance_um);
@@ -43,7 +43,7 @@ std::string post_summary_text(const PostSummaryInfo& info, const PostReport& r) 
     const PostReport::CycleWarning& w = r.cycle_warnings[k];
     s += fmt::format(
         "warning: {}: the canned cycle's feed into the hole, which the controller computes, is "
-        "predicted {:.2f} um off the hole's axis (tolerance {:g} um); --expand-cycles writes "
+        "predicted {:.2f} µm off the hole's axis (tolerance {:g} µm); --expand-cycles writes "
         "it out as moves that keep the tolerance\n",
         where(info, w.file, w.line), w.deviation_mm * 1e3, info.tolerance_um);
   }
@@ -75,7 +75,7 @@ std::string post_report_html(const PostSummaryInfo& info, const PostReport& r) {
   row("output", info.output, false);
   row("machine", info.machine, false);
   row("errors", info.errors, false);
-  row("tolerance", fmt::format("{:g} um", info.tolerance_um));
+  row("tolerance", fmt::format("{:g} µm", info.tolerance_um));
   row("lines in / out", fmt::format("{} / {}", r.lines_in, r.lines_out));
   row("lines changed", fmt::format("{}", r.lines_changed));
   row("lines added", fmt::format("{}", r.lines_added));
@@ -83,9 +83,9 @@ std::string post_report_html(const PostSummaryInfo& info, const PostReport& r) {
   row("arcs cut into arcs", fmt::format("{}", r.arcs_split));
   row("arcs written as lines", fmt::format("{}", r.arcs_linearized));
   row("points corrected", fmt::format("{}", r.points_corrected));
-  row("largest correction", fmt::format("{:.3f} um", r.max_correction_mm * 1e3));
+  row("largest correction", fmt::format("{:.3f} µm", r.max_correction_mm * 1e3));
   row("largest predicted deviation between points",
-      fmt::format("{:.3f} um", r.max_deviation_mm * 1e3));
+      fmt::format("{:.3f} µm", r.max_deviation_mm * 1e3));
   if (r.read.flattened_from > 0)
     row("flattened",
         fmt::format(
@@ -101,7 +101,7 @@ std::string post_report_html(const PostSummaryInfo& info, const PostReport& r) {
         "the tolerance.</p>\n<table>\n<tr><th>line</th><th>predicted deviation</th></tr>\n",
         r.cycle_warning_count);
     for (const PostReport::CycleWarning& w : r.cycle_warnings)
-      h += fmt::format("<tr><td>{}</td><td class=\"n\">{:.3f} um</td></tr>\n",
+      h += fmt::format("<tr><td>{}</td><td class=\"n\">{:.3f} µm</td></tr>\n",
                        html_escape(where(info, w.file, w.line)), w.deviation_mm * 1e3);
     h += "</table>\n";
   }

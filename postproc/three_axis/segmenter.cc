@@ -26,7 +26,7 @@ int ProgramPost::arc_initial_pieces(const nc::Motion& m) const {
   if (!(pieces <= kMaxArcPieces))  // also NaN: never cast to int out of range
     throw InputError(
         *line_file_, current_line_,
-        fmt::format("the arc needs more than {} pieces to keep {:g} um (radius {:g} mm); "
+        fmt::format("the arc needs more than {} pieces to keep {:g} µm (radius {:g} mm); "
                     "raise `tolerance_um` or check the arc's centre",
                     kMaxArcPieces, tol * 1e3, r));
   return std::max(4, static_cast<int>(pieces));
@@ -185,7 +185,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         if (done.size() > kMaxPieces)
           throw InputError(
               *line_file_, current_line_,
-              fmt::format("more than {} pieces needed to keep {:g} um; raise `tolerance_um`",
+              fmt::format("more than {} pieces needed to keep {:g} µm; raise `tolerance_um`",
                           kMaxPieces, tol * 1e3));
         c_prev = c1;
         s_prev = p.s1;

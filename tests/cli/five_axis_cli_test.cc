@@ -65,7 +65,8 @@ TEST(FiveAxisCli, PostAndVerifyTcpProgram) {
                             in + " --program " + out);
   ASSERT_EQ(h.status, 0) << h.err;
   EXPECT_NE(h.out.find("before"), std::string::npos);
-  EXPECT_NE(h.out.find("urad"), std::string::npos);
+  EXPECT_NE(h.out.find("µrad"), std::string::npos);
+  EXPECT_EQ(h.out.find("urad"), std::string::npos);  // units as µm, µrad in all text
 }
 
 TEST(FiveAxisCli, PerMinuteFeedsAndStdout) {

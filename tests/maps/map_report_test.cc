@@ -150,8 +150,8 @@ TEST(MapReport, PageIsWellFormedSelfContainedAndShowsEverySlice) {
   EXPECT_EQ(page.find("http"), std::string::npos);  // nothing from the network
   EXPECT_EQ(page.find("<script"), std::string::npos);
   for (const char* s :
-       {"Plane XY at Z = 50 mm", "Plane XZ at Y = 50 mm", "Plane YZ at X = 100 mm", "ex (um)",
-        "ux (um)", "u, standard uncertainty (um)", "in-plane error (ex, ey)"})
+       {"Plane XY at Z = 50 mm", "Plane XZ at Y = 50 mm", "Plane YZ at X = 100 mm", "ex (µm)",
+        "ux (µm)", "u, standard uncertainty (µm)", "in-plane error (ex, ey)"})
     EXPECT_NE(page.find(s), std::string::npos) << s;
   // Three slices of 8 colour maps (21 x 11, 21 x 11, 11 x 11 cells) and 3 vector panels.
   EXPECT_EQ(std::count(page.begin(), page.end(), '\n') > 0, true);
