@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/installed_samples.h"
 #include "cli/message_wording.h"
 
 namespace volmap::cli {
@@ -41,6 +42,14 @@ int main(int argc, char** argv) {
     runners[app.get_subcommands({}).back()] = std::move(r);
   }
 
+  // An installed volmap finds its samples from any folder (cli/installed_samples.h).
+  std::vector<std::string> notes;
+  const std::vector<std::string> args = volmap::cli::with_installed_samples(
+      std::vector<std::string>(argv, argv + argc), volmap::cli::installed_samples_dir(), &notes);
+  std::vector<char*> arg_ptrs;
+  for (const std::string& a : args) arg_ptrs.push_back(const_cast<char*>(a.c_str()));
+  argv = arg_ptrs.data();
+  for (const std::string& n : notes) std::cerr << "volmap: " << n << "\n";
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
