@@ -11,6 +11,7 @@
 #include "cli/option_checks.h"
 #include "cli/parse_util.h"
 #include "cli/program_setup.h"
+#include "cli/progress.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
 #include "core/model/errors_csv.h"
@@ -97,8 +98,12 @@ int run_five_axis(const Opts& o, const Machine& m, const ErrorSet& e) {
   opt.initial = o.five.initial(m, o.placement);
   opt.outside = o.clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
   opt.tool_offsets_mm = FiveAxisCliOptions::tool_offsets_mm(o.placement);
-  const post::FiveAxisVerifyResult r =
-      post::verify_five_axis(a, o.nominal, b, o.program, m, e, opt);
+  post::FiveAxisVerifyResult r;
+  {
+    TerminalProgress progress("verify");
+    opt.progress = [&](const std::string& p, std::size_t d, std::size_t t) { progress(p, d, t); };
+    r = post::verify_five_axis(a, o.nominal, b, o.program, m, e, opt);
+  }
   write_report(report.get(), o, m, r, true);
   if (o.json) {
     nlohmann::ordered_json doc;
@@ -194,8 +199,12 @@ Runner register_verify(CLI::App& app) {
     opt.sample_step_mm = o->step_mm;
     opt.outside = o->clamp ? OutsidePolicy::kClamp : OutsidePolicy::kError;
     opt.subroutine_path = o->placement.subroutine_dirs(o->nominal);
-    const post::VerifyResult r =
-        post::verify_programs(a, o->nominal, b, o->program, m, e, setup, opt);
+    post::VerifyResult r;
+    {
+      TerminalProgress progress("verify");
+      opt.progress = [&](const std::string& p, std::size_t d, std::size_t t) { progress(p, d, t); };
+      r = post::verify_programs(a, o->nominal, b, o->program, m, e, setup, opt);
+    }
     write_report(report.get(), *o, m, r, false);
     if (o->json) {
       nlohmann::ordered_json doc;

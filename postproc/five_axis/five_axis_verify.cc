@@ -179,6 +179,7 @@ FiveAxisDeviation nominal_deviation(Verifier& v, std::istream& nominal,
   while (reader.next(l)) {
     if (l.tool >= 0) v.use_tool(l.tool, moved, nominal_name, l.line);
     if (!l.has_move) continue;
+    if (v.o_.progress) v.o_.progress(nominal_name, static_cast<std::size_t>(l.line), 0);
     moved = true;
     const FiveAxisMove& m = l.move;
     auto nominal_u = [&](double s) {
@@ -232,6 +233,7 @@ FiveAxisDeviation compensated_deviation(Verifier& v, std::istream& compensated,
   while (reader.next(l)) {
     if (l.tool >= 0) v.use_tool(l.tool, moved, compensated_name, l.line);
     if (!l.has_move) continue;
+    if (v.o_.progress) v.o_.progress(compensated_name, static_cast<std::size_t>(l.line), 0);
     moved = true;
     const FiveAxisMove& m = l.move;
     AxisVector u1 = m.q1;

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <string>
@@ -46,6 +47,9 @@ struct FiveAxisVerifyOptions {
   OutsidePolicy outside = OutsidePolicy::kError;
   /// The tool table (FiveAxisPostOptions::tool_offsets_mm).
   std::map<int, double> tool_offsets_mm;
+  /// Called at each move read (the program's name, its line, 0: the total is
+  /// not known while the program streams); the command line shows it.
+  std::function<void(const std::string& program, std::size_t line, std::size_t total)> progress;
 };
 
 /// `machine`: the part origin already placed.

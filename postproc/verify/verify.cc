@@ -102,16 +102,17 @@ class Run {
 
 DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
                              const std::vector<FeedMove>& nominal, Run& run, double step_mm,
-                             const std::string& name, int& line);
+                             const std::string& name, int& line, const VerifyOptions& options);
 
 // As measure_moves; an error table left (std::out_of_range from the model,
 // naming the table) is reported at the program's line, and a move too long
 // to sample is refused there.
 DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector<FeedMove>& nominal,
-                       Run& run, double step_mm, const std::string& name) {
+                       Run& run, double step_mm, const std::string& name,
+                       const VerifyOptions& options) {
   int line = 0;
   try {
-    return measure_moves(commanded, nominal, run, step_mm, name, line);
+    return measure_moves(commanded, nominal, run, step_mm, name, line, options);
   } catch (const std::out_of_range& e) {
     throw InputError(name, line,
                      std::string("this block leaves the error tables: ") + e.what() +
@@ -121,7 +122,7 @@ DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector
 
 DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
                              const std::vector<FeedMove>& nominal, Run& run, double step_mm,
-                             const std::string& name, int& line) {
+                             const std::string& name, int& line, const VerifyOptions& options) {
   DeviationStats st;
   double sum2 = 0;
   size_t cursor = 0;
@@ -131,6 +132,8 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
   Vector3d previous = commanded.empty() ? Vector3d::Zero() : commanded.front().motion.start_mm;
   double path_mm = 0.0;  // travel of the measured moves so far
   for (const FeedMove& fm : commanded) {
+    if (options.progress)
+      options.progress(name, static_cast<size_t>(&fm - commanded.data()), commanded.size());
     const Corrector& c = run.corrector(fm.tool_length_mm);
     const nc::Motion& m = fm.motion;
     line = fm.line;
@@ -190,8 +193,8 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
   std::vector<FeedMove> nominal_path;
   for (const FeedMove& f : nom)
     if (f.measured) nominal_path.push_back(f);
-  r.before = measure(nom, nominal_path, run, options.sample_step_mm, nominal_name);
-  r.after = measure(out, nominal_path, run, options.sample_step_mm, compensated_name);
+  r.before = measure(nom, nominal_path, run, options.sample_step_mm, nominal_name, options);
+  r.after = measure(out, nominal_path, run, options.sample_step_mm, compensated_name, options);
   return r;
 }
 

@@ -13,6 +13,7 @@
 //  after:  the compensated program.
 #pragma once
 
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -40,6 +41,9 @@ struct VerifyOptions {
   OutsidePolicy outside = OutsidePolicy::kError;
   /// Where `O<name> call` finds NAME.ngc (LinuxCNC's SUBROUTINE_PATH).
   std::vector<std::string> subroutine_path;
+  /// Called as each move of a program is measured (the program's name, moves
+  /// done, moves in all); the command line shows it on a terminal.
+  std::function<void(const std::string& program, std::size_t done, std::size_t total)> progress;
 };
 
 VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_name,

@@ -223,3 +223,29 @@ TEST(Cli, ErrorsOfAnotherMachineAreRefusedUnlessAskedFor) {
                 .status,
             0);
 }
+
+// verify shows its progress on stderr when stderr is a terminal (cli.md),
+// and says nothing there otherwise. script(1) gives the command a terminal.
+TEST(Cli, VerifyShowsProgressOnATerminalOnly) {
+  namespace fs = std::filesystem;
+  const fs::path dir = volmap::test::fresh_dir("verify_progress");
+  const std::string out = (dir / "pocket-M.ngc").string();
+  const std::string m = " --machine " + sample("machines/hsu-3axis.json") + " --errors " +
+                        sample("errors/hsu-3axis.csv") + " --work-offset 250,200,100 ";
+  ASSERT_EQ(run("post" + m + sample("programs/pocket.ngc") + " -o " + out).status, 0);
+  const std::string verify =
+      "verify" + m + "--nominal " + sample("programs/pocket.ngc") + " --program " + out;
+  const Result plain = run(verify);
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_EQ(plain.err, "");
+  const std::string log = (dir / "tty.txt").string();
+  const int st = std::system(("script -qec '" + volmap::test::volmap_binary() + " " + verify +
+                              "' /dev/null > " + log + " 2>&1")
+                                 .c_str());
+  ASSERT_EQ(WIFEXITED(st) ? WEXITSTATUS(st) : -1, 0);
+  const std::string tty = volmap::test::file_bytes(log);
+  EXPECT_NE(tty.find("verify: " + sample("programs/pocket.ngc") + " move 1 of "), std::string::npos)
+      << tty;
+  EXPECT_NE(tty.find("before (nominal program"), std::string::npos) << tty;
+  fs::remove_all(dir);
+}
