@@ -26,7 +26,13 @@ IdentifyResult identify_naming_flags(const Machine& m, const Recordings& rec,
   try {
     return identify(m, rec, opt);
   } catch (const ComponentFitError& e) {
-    throw std::invalid_argument("--component " + e.detail());
+    throw UsageError("--component " + e.detail());
+  } catch (const InputError&) {
+    throw;  // the recordings' file:line
+  } catch (const std::invalid_argument& e) {
+    // An option the machine does not take (a --params name that is not one
+    // of its errors, nothing left to estimate): a usage error (cli.md).
+    throw UsageError(e.what());
   }
 }
 

@@ -249,3 +249,15 @@ TEST(Cli, VerifyShowsProgressOnATerminalOnly) {
   EXPECT_NE(tty.find("before (nominal program"), std::string::npos) << tty;
   fs::remove_all(dir);
 }
+
+// identify's options that do not fit the machine are usage errors (status 2).
+TEST(Cli, IdentifyOptionsThatDoNotFitTheMachineAreUsageErrors) {
+  const std::string base = "identify --machine " + sample("machines/hsu-3axis.json") +
+                           " --recordings " + sample("recordings/reversal.csv") + " -o " +
+                           (volmap::test::fresh_dir("identify_usage") / "e.csv").string();
+  for (const char* extra : {" --params EQ0X", " --component EXX", " --component EXX:x"}) {
+    const Result r = run(base + extra);
+    EXPECT_EQ(r.status, 2) << extra << ": " << r.err;
+    EXPECT_NE(r.err.find("(see volmap identify --help)"), std::string::npos) << r.err;
+  }
+}
