@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -93,13 +94,10 @@ std::vector<double> along_axis(const VolumetricTable& t, const std::vector<std::
 }
 
 double interpolate_nodes(const GridAxis& g, const std::vector<double>& values, double pos) {
-  if (pos <= g.node(0)) return values.front();
-  for (std::int64_t k = 1; k < g.count; ++k)
-    if (pos <= g.node(k)) {
-      const double f = (pos - g.node(k - 1)) / (g.node(k) - g.node(k - 1));
-      return (1 - f) * values[static_cast<size_t>(k - 1)] + f * values[static_cast<size_t>(k)];
-    }
-  return values.back();
+  std::int64_t i = 0;
+  double s = 0.0;
+  g.locate(std::clamp(pos, g.start, g.end), i, s);  // the grid's own cell search
+  return (1 - s) * values[static_cast<size_t>(i)] + s * values[static_cast<size_t>(i + 1)];
 }
 
 const ErrorSet& require_errors(const ExportOptions& o, const std::string& format) {
