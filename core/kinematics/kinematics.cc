@@ -79,7 +79,6 @@ double atan_nonneg(double x) {
 }
 
 constexpr double kTwoPi = 2.0 * M_PI;
-constexpr double kTravelSlack = 1e-9;  // as check_within_travel
 
 // Paden-Kahan subproblem 1: the angle t with Rot(w, t) p = z (w unit; p and
 // z with equal components along w and equal lengths).
@@ -95,12 +94,7 @@ Eigen::Vector3d rotate(const Eigen::Vector3d& w, double t, const Eigen::Vector3d
 }
 
 bool within_travel(const Machine& m, const AxisVector& u) {
-  for (int i = 0; i < m.axis_count(); ++i) {
-    const AxisLimits& L = m.limits[static_cast<size_t>(i)];
-    if (L.unlimited) continue;
-    if (!(u[i] >= L.min - kTravelSlack && u[i] <= L.max + kTravelSlack)) return false;
-  }
-  return true;
+  return first_axis_outside_travel(m, u.data(), m.axis_count()) < 0;
 }
 
 }  // namespace

@@ -83,20 +83,15 @@ ToolPose nominal_forward(const Machine& m, const AxisVector& u) {
 }
 
 void check_within_travel(const Machine& m, const AxisVector& u) {
-  constexpr double kSlack = 1e-9;
-  for (int i = 0; i < m.axis_count(); ++i) {
-    const AxisLimits& L = m.limits[static_cast<size_t>(i)];
-    if (L.unlimited) continue;
-    const double q = u[i];
-    if (!(q >= L.min - kSlack && q <= L.max + kSlack)) {
-      const AxisName a = m.axis_order[static_cast<size_t>(i)];
-      const double k = is_rotary(a) ? units::kDegPerRad : 1.0;
-      const char* unit = is_rotary(a) ? "deg" : "mm";
-      throw std::invalid_argument(fmt::format("{}={:g} {} is outside the travel {:g}..{:g} {}",
-                                              axis_char(a), q * k, unit, L.min * k, L.max * k,
-                                              unit));
-    }
-  }
+  const int i = first_axis_outside_travel(m, u.data(), m.axis_count());
+  if (i < 0) return;
+  const AxisLimits& L = m.limits[static_cast<size_t>(i)];
+  const AxisName a = m.axis_order[static_cast<size_t>(i)];
+  const double k = is_rotary(a) ? units::kDegPerRad : 1.0;
+  const char* unit = is_rotary(a) ? "deg" : "mm";
+  throw std::invalid_argument(fmt::format("{}={:g} {} is outside the travel {:g}..{:g} {}",
+                                          axis_char(a), u[i] * k, unit, L.min * k, L.max * k,
+                                          unit));
 }
 
 }  // namespace volmap

@@ -93,6 +93,20 @@ ToolPose nominal_forward(const Machine& m, const AxisVector& u);
 Eigen::Isometry3d nominal_base_to_workpiece(const Machine& m, const AxisVector& u);
 Eigen::Isometry3d nominal_base_to_spindle(const Machine& m, const AxisVector& u);
 
+/// How far outside its travel an axis position may lie and still count as
+/// inside (mm or rad): a limit reached up to rounding is inside.
+inline constexpr double kTravelSlack = 1e-9;
+
+/// The first of the machine's first `axes` axes whose position u[i] (mm or
+/// rad, in axis_order) lies outside its travel, or -1 when none does.
+inline int first_axis_outside_travel(const Machine& m, const double* u, int axes) {
+  for (int i = 0; i < axes; ++i) {
+    const AxisLimits& L = m.limits[static_cast<size_t>(i)];
+    if (!L.unlimited && !(u[i] >= L.min - kTravelSlack && u[i] <= L.max + kTravelSlack)) return i;
+  }
+  return -1;
+}
+
 /// Throws std::invalid_argument naming the axis when u is outside travel.
 void check_within_travel(const Machine& m, const AxisVector& u);
 

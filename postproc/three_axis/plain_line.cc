@@ -5,6 +5,7 @@
 #include "gcode/g_codes.h"
 #include "gcode/nc_block.h"
 #include "postproc/three_axis/program_post.h"
+#include "postproc/three_axis/travel_check.h"
 
 namespace volmap::post {
 
@@ -22,6 +23,9 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
   if (!read && !nc::lex_plain_axis_words(text, parsed)) return false;
   const nc::PlainAxisWords& words = read ? *read : parsed;
   if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_)) return false;
+  if (st.position_known)  // as line() checks every motion
+    check_travel(machine_, plain_motion_, *last_corrector_, st.origin_mm, *line_file_,
+                 current_line_);
   // From here on, line()'s path for a straight feed move, step by step.
   ctrl_il_known_ = false;  // the run of cycle blocks has ended
   const Corrector& c = *last_corrector_;

@@ -15,6 +15,7 @@
 #include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "maps/tables/volumetric_table.h"
+#include "postproc/three_axis/travel_check.h"
 
 namespace volmap::post {
 
@@ -101,11 +102,6 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
   emitted_known_ = interp_.state().position_known;
 }
 
-namespace {
-void check_travel(const Machine& machine, const nc::Motion& m, const Corrector& c,
-                  const Eigen::Vector3d& origin, const std::string& file, int line);
-}  // namespace
-
 void ProgramPost::line(std::string_view raw, int number, bool newline,
                        const nc::PlainAxisWords* plain) {
   current_line_ = number;
@@ -182,76 +178,6 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
                      "put the stop code on its own line");
   feed_line(text, b, fx, c, style);
 }
-
-namespace {
-// The points of an arc that can be extreme on an axis: its end, and where
-// its sweep crosses a multiple of 90 degrees in its plane (the helix axis is
-// linear in the angle, so its extremes are the ends).
-std::vector<Eigen::Vector3d> arc_extremes(const nc::Motion& m) {
-  std::vector<Eigen::Vector3d> out{m.end_mm};
-  if (m.kind == nc::MotionKind::kCycle) {  // the R plane and the clearance level above the hole
-    for (double z : {m.r_mm, m.clear_mm}) out.emplace_back(m.end_mm.x(), m.end_mm.y(), z);
-    return out;
-  }
-  if (m.kind != nc::MotionKind::kArc) return out;
-  const int i = m.plane == 0   ? 0
-                : m.plane == 1 ? 2
-                               : 1,
-            k = m.plane == 0   ? 1
-                : m.plane == 1 ? 0
-                               : 2;
-  const double r = std::hypot(m.start_mm[i] - m.center_mm[i], m.start_mm[k] - m.center_mm[k]);
-  const double a0 = std::atan2(m.start_mm[k] - m.center_mm[k], m.start_mm[i] - m.center_mm[i]);
-  const double a1 = std::atan2(m.end_mm[k] - m.center_mm[k], m.end_mm[i] - m.center_mm[i]);
-  double sweep = a1 - a0;  // counter-clockwise in the plane's (i, k) order
-  if (m.clockwise) {
-    while (sweep >= 0) sweep -= 2 * M_PI;
-    sweep -= 2 * M_PI * m.extra_turns;
-  } else {
-    while (sweep <= 0) sweep += 2 * M_PI;
-    sweep += 2 * M_PI * m.extra_turns;
-  }
-  const double dir = sweep >= 0 ? 1.0 : -1.0;
-  for (int q = 0; q < 4; ++q) {
-    // Sweep angles t in (0, |sweep|) where the radius points along +-i or +-k.
-    double t = std::fmod(dir * (q * M_PI / 2 - a0), 2 * M_PI);
-    if (t < 0) t += 2 * M_PI;
-    for (; t < std::abs(sweep); t += 2 * M_PI) {
-      Eigen::Vector3d p = m.end_mm;
-      p[i] = m.center_mm[i] + r * std::cos(q * M_PI / 2);
-      p[k] = m.center_mm[k] + r * std::sin(q * M_PI / 2);
-      out.push_back(p);
-    }
-  }
-  return out;
-}
-
-// Refuses a motion that takes an axis outside the machine's travel (its end
-// point, the extremes of an arc's sweep, a cycle's levels), naming the
-// likely cause: no work offset, or a program larger than the travel.
-void check_travel(const Machine& machine, const nc::Motion& m, const Corrector& c,
-                  const Eigen::Vector3d& origin, const std::string& file, int line) {
-  for (const Eigen::Vector3d& p : arc_extremes(m)) {
-    const Eigen::Vector3d u = c.axis_position(p);
-    for (int a = 0; a < 3; ++a) {
-      const AxisLimits& L = machine.limits[static_cast<size_t>(a)];
-      if (L.unlimited || (u[a] >= L.min - 1e-9 && u[a] <= L.max + 1e-9)) continue;
-      throw InputError(
-          file, line,
-          fmt::format(
-              "this block moves {} to {:.4f} mm, outside its travel {:g}..{:g} mm (machine {}); {}",
-              "XYZ"[a], u[a], L.min, L.max, machine.name,
-              origin.isZero(0.0)
-                  ? "the program's origin is the machine's zero (no --work-offset was given, or "
-                    "the program's G10 or G92 put it there): give the part's work offset with "
-                    "--work-offset X,Y,Z"
-                  : fmt::format("the program lies outside the travel at its origin {:g},{:g},{:g} "
-                                "mm (--work-offset, G10, G92): check the work offset",
-                                origin.x(), origin.y(), origin.z())));
-    }
-  }
-}
-}  // namespace
 
 bool ProgramPost::minimal_axis_words(const nc::Block& b, const BlockStyle& style, bool g53,
                                      const Vector3d& cmd, nc::BlockEdit& e,

@@ -198,5 +198,30 @@ TEST(PostArcs, AnArcThatLeavesTheTravelIsRefusedAtItsLine) {
   }
 }
 
+// The travel is checked on every path that writes a line: a plain line of
+// axis words (the post's shortcut, docs/post.md "Speed") included. With
+// travel narrower than the error table, a move past the travel's end is
+// inside the table: only the travel check can refuse it.
+TEST(PostArcs, APlainLineOutsideTheTravelIsRefusedOnTheShortcutToo) {
+  Machine narrow = hsu();
+  narrow.limits[0].max = 300.0;  // the table measures X to 500 mm
+  for (bool shortcuts : {true, false}) {
+    std::istringstream in("G21 G90 G17 G54\nG0 X10 Y10 Z20\nG1 X20 F100\nX250\nX210\n");
+    std::ostringstream out;
+    post::PostOptions o;
+    o.shortcuts = shortcuts;
+    try {
+      post::post_program(in, "narrow.ngc", out, narrow, hsu_errors(), offset_setup(60, 100, 100),
+                         o);
+      ADD_FAILURE() << "written with shortcuts " << shortcuts;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                "narrow.ngc:4: this block moves X to 310.0000 mm, outside its travel 0..300 mm "
+                "(machine hsu-3axis); the program lies outside the travel at its origin "
+                "60,100,100 mm (--work-offset, G10, G92): check the work offset");
+    }
+  }
+}
+
 }  // namespace
 }  // namespace volmap
