@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/common/html.h"
+#include "core/common/svg_plot.h"
 #include "core/explain/explain.h"
 #include "core/explain/parameter_report.h"
 
@@ -21,14 +22,7 @@ nlohmann::json axis_json(const std::optional<AxisName>& a) {
 }
 
 std::string params_text(const Finding& f) {
-  std::string s;
-  for (const auto& [k, v] : f.parameters) {
-    if (!s.empty()) s += ", ";
-    s += k + " " + (v.is_string() ? v.get<std::string>() : v.dump());
-    for (const auto& [ek, ev] : f.std_errors)
-      if (ek == k && std::isfinite(ev)) s += fmt::format(" ± {:.2g}", ev);
-  }
-  return s;
+  return explanation::parameters_text(f.parameters, f.std_errors);
 }
 
 // A held-out RMS, or n/a (never followed by a unit) when there is none.
@@ -39,11 +33,15 @@ std::string opt_um(const std::optional<double>& v) {
   return v ? fmt::format("{:.3f} µm", *v) : std::string("n/a");
 }
 
-/// One scatter panel: points (x, y), y range shared by the pair of panels.
-std::string svg_panel(const std::string& title, const std::string& xlabel,
+/// One scatter panel: points (x, y) coloured by group, y range [y_lo, y_hi]
+/// shared by the pair of panels; `fit` (may be empty) the fitted term at
+/// each point, drawn as a dark dash over the point's column.
+std::string svg_panel(const std::string& title, const std::string& x_label,
                       const std::vector<double>& x, const std::vector<double>& y,
-                      const std::vector<int>& group, double y_lo, double y_hi) {
-  const double W = 420, H = 260, L = 56, R = 12, T = 24, B = 40;
+                      const std::vector<int>& group, const std::vector<double>& fit, double y_lo,
+                      double y_hi) {
+  constexpr double W = 440, H = 280;
+  const svg::Frame f{58, 26, W - 58 - 18, H - 26 - 44};
   double x_lo = INFINITY, x_hi = -INFINITY;
   for (double v : x)
     if (std::isfinite(v)) {
@@ -51,50 +49,39 @@ std::string svg_panel(const std::string& title, const std::string& xlabel,
       x_hi = std::max(x_hi, v);
     }
   if (!std::isfinite(x_lo)) x_lo = 0, x_hi = 1;
-  if (x_hi <= x_lo) x_hi = x_lo + 1;
+  if (x_hi <= x_lo) x_lo -= 0.5, x_hi += 0.5;
   const double pad = 0.03 * (x_hi - x_lo);
-  x_lo -= pad;
-  x_hi += pad;
-  auto px = [&](double v) { return L + (v - x_lo) / (x_hi - x_lo) * (W - L - R); };
-  auto py = [&](double v) { return T + (y_hi - v) / (y_hi - y_lo) * (H - T - B); };
+  const svg::Scale px{x_lo - pad, x_hi + pad, f.left, f.right()};
+  const svg::Scale py{y_lo, y_hi, f.bottom(), f.top};
   std::ostringstream s;
-  s << fmt::format(
-      "<svg width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
-      "role=\"img\">",
-      W, H);
-  s << fmt::format("<title>{}</title>", html_escape(title));
-  s << fmt::format(
-      "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#fff\" stroke=\"#888\"/>", L, T,
-      W - L - R, H - T - B);
+  s << svg::open_plot(W, H, title) << svg::frame_rect(f);
   if (y_lo < 0 && y_hi > 0)
     s << fmt::format(
-        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#bbb\"/>", L, py(0),
-        W - R, py(0));
+        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#bbb\"/>\n", f.left,
+        py(0), f.right(), py(0));
   for (std::size_t i = 0; i < x.size(); ++i) {
     if (!std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
     const int g = group.empty() ? 0 : group[i];
     const char* colour = g > 0 ? "#c0392b" : (g < 0 ? "#2471a3" : "#34495e");
     s << fmt::format(
-        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2\" fill=\"{}\" fill-opacity=\"0.6\"/>", px(x[i]),
-        py(y[i]), colour);
+        "<circle class=\"data\" cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2\" fill=\"{}\" "
+        "fill-opacity=\"0.6\"/>",
+        px(x[i]), py(y[i]), colour);
   }
-  s << fmt::format("<text x=\"{}\" y=\"16\" font-size=\"13\">{}</text>", L, html_escape(title));
-  s << fmt::format(
-      "<text x=\"{:.0f}\" y=\"{:.0f}\" font-size=\"11\" text-anchor=\"middle\">{}</text>",
-      (L + W - R) / 2, H - 6, html_escape(xlabel));
-  s << fmt::format("<text x=\"{:.0f}\" y=\"{:.0f}\" font-size=\"10\">{:.4g}</text>", L, H - B + 13,
-                   x_lo + pad);
-  s << fmt::format(
-      "<text x=\"{:.0f}\" y=\"{:.0f}\" font-size=\"10\" text-anchor=\"end\">{:.4g}</text>", W - R,
-      H - B + 13, x_hi - pad);
-  s << fmt::format("<text x=\"{}\" y=\"{:.0f}\" font-size=\"10\" text-anchor=\"end\">{:.3g}</text>",
-                   L - 4, T + 8, y_hi);
-  s << fmt::format("<text x=\"{}\" y=\"{:.0f}\" font-size=\"10\" text-anchor=\"end\">{:.3g}</text>",
-                   L - 4, H - B, y_lo);
-  s << fmt::format(
-      "<text x=\"12\" y=\"{:.0f}\" font-size=\"11\" transform=\"rotate(-90 12 {:.0f})\" "
-      "text-anchor=\"middle\">residual (µm)</text>",
-      (T + H - B) / 2, (T + H - B) / 2);
+  if (!fit.empty()) {
+    std::string d;
+    for (std::size_t i = 0; i < x.size() && i < fit.size(); ++i)
+      if (std::isfinite(x[i]) && std::isfinite(fit[i]))
+        d += fmt::format("M{:.1f},{:.1f}h6", px(x[i]) - 3, py(fit[i]));
+    s << fmt::format(
+        "\n<path class=\"data fit\" d=\"{}\" stroke=\"#111\" stroke-width=\"1.6\" "
+        "fill=\"none\"/>",
+        d);
+  }
+  s << fmt::format("\n<text x=\"{}\" y=\"16\" font-size=\"12\">{}</text>\n", f.left,
+                   html_escape(title));
+  s << svg::x_axis(f, px, svg::nice_ticks(x_lo - pad, x_hi + pad), x_label);
+  s << svg::y_axis(f, py, svg::nice_ticks(y_lo, y_hi), "residual, µm");
   s << "</svg>";
   return s.str();
 }
@@ -273,17 +260,21 @@ std::string explain_html(const ExplainResult& r) {
           hi = std::max(hi, y);
         }
     if (!std::isfinite(lo)) lo = -1, hi = 1;
-    if (hi <= lo) hi = lo + 1;
-    const double pad = 0.05 * (hi - lo);
+    const auto [y_lo, y_hi] = svg::nice_range(lo, hi);
+    std::vector<double> fitted(f.plot.before_um.size());
+    for (std::size_t k = 0; k < fitted.size() && k < f.plot.after_um.size(); ++k)
+      fitted[k] = f.plot.before_um[k] - f.plot.after_um[k];
+    const std::string x_label = explanation::regressor_label(f.plot.regressor);
     s << "<div class=\"plots\">\n"
-      << svg_panel(fmt::format("before: residual without {} {}", f.effect, ax), f.plot.regressor,
-                   f.plot.x, f.plot.before_um, f.plot.group, lo - pad, hi + pad)
+      << svg_panel(fmt::format("before: residual without {} {}", f.effect, ax), x_label, f.plot.x,
+                   f.plot.before_um, f.plot.group, fitted, y_lo, y_hi)
       << "\n"
-      << svg_panel(fmt::format("after: residual with {} {}", f.effect, ax), f.plot.regressor,
-                   f.plot.x, f.plot.after_um, f.plot.group, lo - pad, hi + pad)
+      << svg_panel(fmt::format("after: residual with {} {}", f.effect, ax), x_label, f.plot.x,
+                   f.plot.after_um, f.plot.group, {}, y_lo, y_hi)
       << "\n</div>\n";
-    if (!f.plot.group.empty())
-      s << "<p class=\"note\">red: approached from +, blue: approached from &minus;.</p>\n";
+    s << "<p class=\"note\">"
+      << (f.plot.group.empty() ? "" : "Red: approached from +, blue: approached from &minus;. ")
+      << "Black dashes: the finding's fitted term at each point.</p>\n";
   }
   if (!r.notes.empty()) {
     s << "<h2>Notes</h2>\n<ul>\n";

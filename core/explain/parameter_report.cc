@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <string>
 
+#include "core/common/svg_plot.h"
 #include "core/common/units.h"
 
 namespace volmap::explanation {
@@ -39,6 +41,82 @@ void amplitude_phase(const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov, in
   }
   amp_se = delta_se(g, cov);
   phase_deg = std::atan2(b, a) * units::kDegPerRad;
+}
+
+namespace {
+
+// The unit a parameter's name ends with, and the name without it.
+struct NameUnit {
+  std::string name, unit;
+};
+NameUnit split_unit(const std::string& key) {
+  static const std::pair<const char*, const char*> kSuffixes[] = {
+      {"_um_per_h", "µm/h"}, {"_um", "µm"}, {"_urad", "µrad"}, {"_mm", "mm"},
+      {"_deg", "°"},         {"_s", "s"},   {"_c", "°C"}};
+  if (key == "um_per_k") return {"coefficient", "µm/K"};
+  for (const auto& [suffix, unit] : kSuffixes) {
+    const std::string sfx(suffix);
+    if (key.size() > sfx.size() && key.compare(key.size() - sfx.size(), sfx.size(), sfx) == 0)
+      return {key.substr(0, key.size() - sfx.size()), unit};
+  }
+  return {key, ""};
+}
+
+std::optional<double> std_error_of(const std::vector<std::pair<std::string, double>>& se,
+                                   const std::string& key) {
+  for (const auto& [k, v] : se)
+    if (k == key) return v;
+  return std::nullopt;
+}
+
+std::string number_text(const nlohmann::json& v, std::optional<double> se) {
+  if (v.is_number_integer()) return v.dump();
+  if (v.is_number()) return svg::value_with_error(v.get<double>(), se.value_or(0.0));
+  if (v.is_string()) return v.get<std::string>();
+  return v.dump();
+}
+
+}  // namespace
+
+std::string parameters_text(const std::vector<std::pair<std::string, nlohmann::json>>& parameters,
+                            const std::vector<std::pair<std::string, double>>& std_errors) {
+  std::string s;
+  for (const auto& [key, v] : parameters) {
+    if (!s.empty()) s += ", ";
+    const NameUnit nu = split_unit(key);
+    std::string value;
+    if (v.is_array()) {
+      value = "[";
+      for (std::size_t i = 0; i < v.size(); ++i)
+        value += (i ? ", " : "") +
+                 number_text(v[i], std_error_of(std_errors, key + "/" + std::to_string(i)));
+      value += "]";
+    } else {
+      value = number_text(v, std_error_of(std_errors, key));
+    }
+    const bool has_unit = !nu.unit.empty() && (v.is_number() || v.is_array());
+    s += nu.name + " " + value;
+    if (has_unit) s += (nu.unit == "°" ? "" : " ") + nu.unit;
+  }
+  return s;
+}
+
+std::string regressor_label(const std::string& r) {
+  auto upper = [](char c) {
+    return static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  };
+  if (r == "t_s") return "time since start, s";
+  if (r == "run") return "run number";
+  if (r.size() == 4 && r.compare(1, 3, "_mm") == 0)
+    return std::string(1, upper(r[0])) + " position, mm";
+  if (r.size() == 5 && r.compare(1, 4, "_deg") == 0)
+    return std::string(1, upper(r[0])) + " position, deg";
+  const std::string feed = "feed_mm_min * dir_";
+  if (r.size() == feed.size() + 1 && r.compare(0, feed.size(), feed) == 0)
+    return "feed × approach direction of " + std::string(1, upper(r.back())) + ", mm/min";
+  if (r.size() > 7 && r.compare(0, 5, "temp_") == 0 && r.compare(r.size() - 2, 2, "_c") == 0)
+    return "temperature " + r.substr(5, r.size() - 7) + ", °C";
+  return r;
 }
 
 }  // namespace volmap::explanation

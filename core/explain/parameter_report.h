@@ -6,6 +6,9 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace volmap::explanation {
 
@@ -21,5 +24,18 @@ double delta_se(const Eigen::VectorXd& g, const Eigen::MatrixXd& cov);
 /// error and the phase atan2(b, a) in degrees.
 void amplitude_phase(const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov, int i_sin, int i_cos,
                      double& amp, double& amp_se, double& phase_deg);
+
+/// A finding's parameters as a reader wants them: the unit out of the name
+/// and after the number, each value with its standard error in sensible
+/// digits ("value 2.05 ± 0.23 µm, tau 988 ± 150 s"); an array parameter
+/// (setup_shift's per_run_um) element by element with the errors of
+/// "name/i".
+std::string parameters_text(const std::vector<std::pair<std::string, nlohmann::json>>& parameters,
+                            const std::vector<std::pair<std::string, double>>& std_errors);
+
+/// A plot's regressor (a recordings column, "run", "feed_mm_min * dir_x")
+/// as an axis label: its meaning, a comma, its unit ("X position, mm",
+/// "time since start, s").
+std::string regressor_label(const std::string& regressor);
 
 }  // namespace volmap::explanation

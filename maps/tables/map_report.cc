@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/common/html.h"
+#include "core/common/svg_plot.h"
 #include "maps/tables/layer_name.h"
 
 namespace volmap::maps {
@@ -90,23 +91,23 @@ std::vector<Slice> middle_slices(const VolumetricTable& t) {
 
 std::vector<Panel> panels_of(const VolumetricTable& t) {
   std::vector<Panel> panels;
-  panels.push_back({"ex (µm)", {0}, 1e3, false});
-  panels.push_back({"ey (µm)", {1}, 1e3, false});
-  panels.push_back({"ez (µm)", {2}, 1e3, false});
-  panels.push_back({"|e| (µm)", {0, 1, 2}, 1e3, true});
+  panels.push_back({"ex, µm", {0}, 1e3, false});
+  panels.push_back({"ey, µm", {1}, 1e3, false});
+  panels.push_back({"ez, µm", {2}, 1e3, false});
+  panels.push_back({"|e|, µm", {0, 1, 2}, 1e3, true});
   if (const std::optional<int> ei = t.channel("ei"))
-    panels.push_back({"|tool-axis error| (µrad)", {*ei, *ei + 1, *ei + 2}, 1e6, true});
+    panels.push_back({"|tool-axis error|, µrad", {*ei, *ei + 1, *ei + 2}, 1e6, true});
   if (const std::optional<int> ux = t.channel("ux")) {
-    panels.push_back({"ux (µm)", {*ux}, 1e3, false});
-    panels.push_back({"uy (µm)", {*ux + 1}, 1e3, false});
-    panels.push_back({"uz (µm)", {*ux + 2}, 1e3, false});
+    panels.push_back({"ux, µm", {*ux}, 1e3, false});
+    panels.push_back({"uy, µm", {*ux + 1}, 1e3, false});
+    panels.push_back({"uz, µm", {*ux + 2}, 1e3, false});
   }
   // Five-axis: the rotary axes' corrections (urad).
   for (const char* name : {"ua", "ub", "uc"})
     if (const std::optional<int> c = t.channel(name))
-      panels.push_back({std::string(name) + " (µrad)", {*c}, 1e6, false});
+      panels.push_back({std::string(name) + ", µrad", {*c}, 1e6, false});
   if (const std::optional<int> u = t.channel("u"))
-    panels.push_back({"u, standard uncertainty (µm)", {*u}, 1e3, true});
+    panels.push_back({"u, standard uncertainty, µm", {*u}, 1e3, true});
   return panels;
 }
 
@@ -134,12 +135,11 @@ std::string page_head(const VolumetricTable& t, const ReportInfo& info, int laye
     h += fmt::format("<tr><td>interpolation error</td><td>{:.4f} µm ({})</td></tr>\n",
                      info.max_interpolation_um, html_escape(info.interpolation));
   h += "</table>\n";
-  h +=
-      "<p>Colour maps: red positive, blue negative, white zero, symmetric about zero (magnitudes: "
-      "white at the slice's minimum to red at its maximum); e = tool-tip error, actual minus "
-      "nominal, workpiece coordinates; "
-      "u (ux uy uz) = commanded-position correction. Arrows: in-plane error, scaled so the longest "
-      "is one cell (length in the caption).</p>\n";
+  h += "<p>Colour maps: red positive, blue negative, white zero, symmetric about zero (magnitudes: "
+       "white at the slice's minimum to red at its maximum); e = tool-tip error, actual minus "
+       "nominal, workpiece coordinates; "
+       "u (ux uy uz) = commanded-position correction. Arrows: in-plane error, centred on their "
+       "nodes, scaled so the longest is one cell (its length in the caption).</p>\n";
   return h;
 }
 
@@ -151,7 +151,9 @@ std::array<double, 2> cell_bounds(const std::vector<std::int64_t>& k, size_t i, 
 }
 
 // One slice as drawn: its axes, the nodes drawn on each, and the plane
-// scaled to kPanel px on its longer side.
+// scaled to kPanel px on its longer side (see side()), inside a frame with the axes'
+// ticks and labels left and below and room for a colour bar on the right.
+// `inset` px of frame around the nodes (the arrows' half cell).
 struct SlicePlane {
   SlicePlane(const VolumetricTable& t, int layer, const Slice& s)
       : table(t),
@@ -161,13 +163,22 @@ struct SlicePlane {
         gb(t.grid[static_cast<size_t>(s.b)]),
         ka(drawn_nodes(ga)),
         kb(drawn_nodes(gb)),
-        px(kPanel / std::max(ga.end - ga.start, gb.end - gb.start)),
-        W((ga.end - ga.start) * px),
-        H((gb.end - gb.start) * px),
+        W(side(ga.end - ga.start, std::max(ga.end - ga.start, gb.end - gb.start))),
+        H(side(gb.end - gb.start, std::max(ga.end - ga.start, gb.end - gb.start))),
+        pxa(W / std::max(ga.end - ga.start, 1e-12)),
+        pxb(H / std::max(gb.end - gb.start, 1e-12)),
         idx(s.base) {}
 
-  double X(double qa) const { return 10 + (qa - ga.start) * px; }
-  double Y(double qb) const { return 10 + H - (qb - gb.start) * px; }  // vertical axis up
+  static constexpr double kLeft = 50, kTop = 10, kBottom = 42, kRight = 96;
+  // A side of kPanel px for the longer axis, in proportion for the other,
+  // but at least kMinSide px: room for the colour bar's label along it.
+  static constexpr double kMinSide = 160;
+  static double side(double span, double longest) {
+    return std::max(kMinSide, longest > 0 ? kPanel * span / longest : kPanel);
+  }
+  double X(double qa) const { return kLeft + inset + (qa - ga.start) * pxa; }
+  double Y(double qb) const { return kTop + inset + H - (qb - gb.start) * pxb; }  // vertical up
+  svg::Frame frame() const { return {kLeft, kTop, W + 2 * inset, H + 2 * inset}; }
   // The channels of the node at node indices ia, ib of the plane's axes.
   const double* at(std::int64_t ia, std::int64_t ib) {
     idx[static_cast<size_t>(slice.a)] = ia;
@@ -186,11 +197,20 @@ struct SlicePlane {
     }
     return text;
   }
-  std::string svg_open() const {
-    return fmt::format(
-        "<figure>\n<svg width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" "
-        "role=\"img\">\n",
-        W + 20, H + 20, W + 20, H + 20);
+  // The plot's opening, frame and both axes with round ticks in the axes'
+  // display units.
+  std::string svg_open(const std::string& title, bool colour_bar = true) const {
+    const svg::Frame f = frame();
+    const double a0 = display(ga.axis, ga.start), a1 = display(ga.axis, ga.end);
+    const double b0 = display(gb.axis, gb.start), b1 = display(gb.axis, gb.end);
+    const svg::Scale sx{a0, a1, X(ga.start), X(ga.end)}, sy{b0, b1, Y(gb.start), Y(gb.end)};
+    return "<figure>\n" +
+           svg::open_plot(f.right() + (colour_bar ? kRight : 16), f.bottom() + kBottom, title) +
+           svg::frame_rect(f, "none") +
+           svg::x_axis(f, sx, svg::nice_ticks(a0, a1, 4),
+                       fmt::format("{}, {}", axis_char(ga.axis), unit(ga.axis))) +
+           svg::y_axis(f, sy, svg::nice_ticks(b0, b1, 4),
+                       fmt::format("{}, {}", axis_char(gb.axis), unit(gb.axis)));
   }
 
   const VolumetricTable& table;
@@ -199,10 +219,45 @@ struct SlicePlane {
   const GridAxis& ga;                      ///< horizontal axis
   const GridAxis& gb;                      ///< vertical axis
   const std::vector<std::int64_t> ka, kb;  ///< the nodes drawn on each
-  const double px;                         ///< px per mm (or rad)
-  const double W, H;                       ///< the plane's size, px
+  const double W, H;                       ///< the nodes' extent, px
+  const double pxa, pxb;                   ///< px per mm (or rad) of each axis
+  double inset = 0.0;                      ///< frame beyond the nodes, px
   std::vector<std::int64_t> idx;           ///< node indices of the last at()
 };
+
+// The colour bar right of the frame: the colours of [lo, hi] from bottom
+// to top, round ticks, and the panel's name and unit along it.
+std::string colour_bar(const svg::Frame& f, double lo, double hi, bool magnitude,
+                       const std::string& label) {
+  constexpr int kSteps = 32;
+  const double x = f.right() + 10, w = 12;
+  std::string h = "<g class=\"colour-bar\">";
+  for (int i = 0; i < kSteps; ++i) {
+    const double t0 = static_cast<double>(i) / kSteps, t1 = static_cast<double>(i + 1) / kSteps;
+    const double mid = 0.5 * (t0 + t1);  // 0 at lo, 1 at hi
+    h += fmt::format(
+        "<rect x=\"{:.1f}\" y=\"{:.2f}\" width=\"{:.1f}\" height=\"{:.2f}\" fill=\"{}\"/>", x,
+        f.bottom() - t1 * f.height, w, f.height / kSteps + 0.05,
+        colour(magnitude ? mid : 2 * mid - 1));
+  }
+  h += fmt::format(
+      "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" "
+      "stroke=\"#888\"/>\n",
+      x, f.top, w, f.height);
+  const svg::Ticks t = svg::nice_ticks(lo, hi, 4);
+  const svg::Scale y{lo, hi, f.bottom(), f.top};
+  for (double v : t.values)
+    h += fmt::format(
+        "<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\" stroke=\"#333\"/>"
+        "<text class=\"c-tick\" x=\"{3:.1f}\" y=\"{4:.1f}\" font-size=\"10\">{5}</text>\n",
+        x + w, y(v), x + w + 3, x + w + 5, y(v) + 3.5, t.text(v));
+  const double lx = x + w + 62, ly = f.top + f.height / 2;
+  h += fmt::format(
+      "<text class=\"c-label\" x=\"{0:.1f}\" y=\"{1:.1f}\" font-size=\"11\" "
+      "transform=\"rotate(-90 {0:.1f} {1:.1f})\" text-anchor=\"middle\">{2}</text></g>\n",
+      lx, ly, html_escape(label));
+  return h;
+}
 
 // A colour map of one panel over the plane.
 std::string colour_panel(SlicePlane& plane, const Panel& p) {
@@ -217,7 +272,8 @@ std::string colour_panel(SlicePlane& plane, const Panel& p) {
       vmin = std::min(vmin, v);
       vmax = std::max(vmax, v);
     }
-  std::string h = plane.svg_open();
+  plane.inset = 0.0;
+  std::string h = plane.svg_open(p.title);
   for (size_t i = 0; i < ka.size(); ++i) {
     const std::array<double, 2> ra = cell_bounds(ka, i, ga);
     for (size_t j = 0; j < kb.size(); ++j) {
@@ -228,20 +284,26 @@ std::string colour_panel(SlicePlane& plane, const Panel& p) {
       h += fmt::format(
           "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
           "fill=\"{}\"><title>{} = {:g}, {} = {:g}: {:.4f}</title></rect>\n",
-          plane.X(ra[0]), plane.Y(rb[1]), std::max(0.01, (ra[1] - ra[0]) * plane.px),
-          std::max(0.01, (rb[1] - rb[0]) * plane.px), colour(tcol), axis_char(ga.axis),
+          plane.X(ra[0]), plane.Y(rb[1]), std::max(0.01, (ra[1] - ra[0]) * plane.pxa),
+          std::max(0.01, (rb[1] - rb[0]) * plane.pxb), colour(tcol), axis_char(ga.axis),
           display(ga.axis, ga.node(ka[i])), axis_char(gb.axis), display(gb.axis, gb.node(kb[j])),
           v);
     }
   }
+  h += svg::frame_rect(plane.frame(), "none");
+  h += p.magnitude
+           ? colour_bar(plane.frame(), vmin, vmax > vmin ? vmax : vmin + 1e-3, true, p.title)
+           : colour_bar(plane.frame(), -std::max(vabs, 1e-3), std::max(vabs, 1e-3), false, p.title);
   h += "</svg>\n";
   h += fmt::format("<figcaption>{}: {:.4f} .. {:.4f}{}</figcaption>\n</figure>\n",
                    html_escape(p.title), vmin, vmax,
-                   p.magnitude ? " (white .. red)" : fmt::format(" (scale +-{:.4f})", vabs));
+                   p.magnitude ? " (white .. red)" : fmt::format(" (scale ±{:.4f})", vabs));
   return h;
 }
 
-// The in-plane components of e as arrows (a plane of two linear axes).
+// The in-plane components of e as arrows centred on their nodes (a plane
+// of two linear axes), the longest one cell long: every arrow inside the
+// frame, which reaches half a cell beyond the outer nodes.
 std::string vector_panel(SlicePlane& plane) {
   const GridAxis &ga = plane.ga, &gb = plane.gb;
   const std::vector<std::int64_t>&ka = plane.ka, &kb = plane.kb;
@@ -255,28 +317,27 @@ std::string vector_panel(SlicePlane& plane) {
   const double cell = std::min(plane.W / std::max<double>(1, static_cast<double>(ka.size()) - 1),
                                plane.H / std::max<double>(1, static_cast<double>(kb.size()) - 1));
   const double k = emax > 0 ? cell / emax : 0.0;
-  std::string h = plane.svg_open();
-  h += fmt::format(
-      "<rect x=\"10\" y=\"10\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"none\" "
-      "stroke=\"#999\"/>\n",
-      plane.W, plane.H);
+  plane.inset = cell / 2;
+  const std::string name =
+      fmt::format("in-plane error (e{}, e{})", static_cast<char>(axis_char(ga.axis) - 'A' + 'a'),
+                  static_cast<char>(axis_char(gb.axis) - 'A' + 'a'));
+  std::string h = plane.svg_open(name, false);
   for (std::int64_t ia : ka)
     for (std::int64_t ib : kb) {
       const double* v = plane.at(ia, ib);
-      const double x0 = plane.X(ga.node(ia)), y0 = plane.Y(gb.node(ib));
-      const double x1 = x0 + v[ca] * k, y1 = y0 - v[cb] * k;
+      const double xc = plane.X(ga.node(ia)), yc = plane.Y(gb.node(ib));
+      const double dx = 0.5 * v[ca] * k, dy = -0.5 * v[cb] * k;
       h += fmt::format(
-          "<line x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" stroke=\"#b22\" "
-          "stroke-width=\"1.2\"/>"
+          "<line class=\"data arrow\" x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" "
+          "stroke=\"#b22\" stroke-width=\"1.2\"/>"
           "<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"1.2\" fill=\"#333\"/>\n",
-          x0, y0, x1, y1, x0, y0);
+          xc - dx, yc - dy, xc + dx, yc + dy, xc + dx, yc + dy);
     }
   h += "</svg>\n";
   h += fmt::format(
-      "<figcaption>in-plane error (e{}, e{}): longest {:.4f} µm = one "
+      "<figcaption>{}: arrows centred on the nodes, head dotted; the longest, {:.4f} µm, is one "
       "cell</figcaption>\n</figure>\n",
-      static_cast<char>(axis_char(ga.axis) - 'A' + 'a'),
-      static_cast<char>(axis_char(gb.axis) - 'A' + 'a'), emax * 1e3);
+      name, emax * 1e3);
   return h;
 }
 

@@ -7,12 +7,15 @@
 #include <vector>
 
 #include "core/common/html.h"
+#include "core/common/svg_plot.h"
 
 namespace volmap::post {
 namespace {
 
-constexpr double kWidth = 760, kHeight = 280;
-constexpr double kLeft = 64, kRight = 16, kTop = 16, kBottom = 40;
+constexpr double kWidth = 760, kHeight = 300;
+// The plotting area: the legend's row above it, the last tick label's
+// half width to its right.
+const svg::Frame kFrame{64, 34, kWidth - 64 - 32, kHeight - 34 - 46};
 const char* const kColour[2] = {"#d95f02", "#1b65b0"};  // before, after
 
 // Decades spanned by a log axis over the positive values [lo, hi].
@@ -25,13 +28,13 @@ struct LogAxis {
   }
   double y(double v) const {
     const double e = std::log10(std::max(v, std::pow(10.0, lo_exp)));
-    return kTop + (kHeight - kTop - kBottom) * (hi_exp - e) / (hi_exp - lo_exp);
+    return kFrame.top + kFrame.height * (hi_exp - e) / (hi_exp - lo_exp);
   }
 };
 
 // One plot: the largest deviation per bin along the path, both runs.
 std::string profile_plot(const VerifyReportRun* runs[2], bool angles, const std::string& title,
-                         const std::string& unit) {
+                         const std::string& y_label) {
   double length = 0, lo = 1e300, hi = 0;
   for (int r = 0; r < 2; ++r) {
     const DeviationProfile& p = *runs[r]->profile;
@@ -45,33 +48,24 @@ std::string profile_plot(const VerifyReportRun* runs[2], bool angles, const std:
   if (hi <= 0) return fmt::format("<p>{}: no samples.</p>\n", html_escape(title));
   if (length <= 0) length = 1;
   const LogAxis ax(std::max(lo, hi * 1e-4), hi);
-  auto x_of = [&](double s) { return kLeft + (kWidth - kLeft - kRight) * s / length; };
-  std::string svg = fmt::format(
-      "<figure><figcaption>{}</figcaption>\n<svg width=\"{}\" height=\"{}\" "
-      "viewBox=\"0 0 {} {}\" role=\"img\">\n",
-      html_escape(title), kWidth, kHeight, kWidth, kHeight);
-  // Grid: a line per decade, labelled; path length ticks.
+  const svg::Scale x_of{0.0, length, kFrame.left, kFrame.right()};
+  std::string svg = fmt::format("<figure><figcaption>{}</figcaption>\n", html_escape(title)) +
+                    svg::open_plot(kWidth, kHeight, title, true) + svg::frame_rect(kFrame);
+  // A grid line and a label per decade; round path lengths.
   for (double e = ax.lo_exp; e <= ax.hi_exp + 1e-9; e += 1) {
     const double y = ax.y(std::pow(10.0, e));
     svg += fmt::format(
         "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>"
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"end\">{:g}</text>\n",
-        kLeft, y, kWidth - kRight, y, kLeft - 4, y + 4, std::pow(10.0, e));
+        "<text class=\"y-tick\" x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"10\" "
+        "text-anchor=\"end\">{:g}</text>\n",
+        kFrame.left, y, kFrame.right(), y, kFrame.left - 6, y + 3.5, std::pow(10.0, e));
   }
-  for (int t = 0; t <= 5; ++t) {
-    const double s = length * t / 5, x = x_of(s);
-    svg += fmt::format(
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"middle\">{:.0f}</text>\n",
-        x, kHeight - kBottom + 14, s);
-  }
+  svg += svg::x_axis(kFrame, x_of, svg::nice_ticks(0.0, length), "path length, mm");
+  const double mid = kFrame.top + kFrame.height / 2;
   svg += fmt::format(
-      "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"middle\">path length, "
-      "mm</text>\n",
-      (kLeft + kWidth - kRight) / 2, kHeight - 6);
-  svg += fmt::format(
-      "<text x=\"12\" y=\"{:.1f}\" font-size=\"11\" transform=\"rotate(-90 12 {:.1f})\" "
-      "text-anchor=\"middle\">{}</text>\n",
-      (kTop + kHeight - kBottom) / 2, (kTop + kHeight - kBottom) / 2, html_escape(unit));
+      "<text class=\"y-label\" x=\"14\" y=\"{0:.1f}\" font-size=\"11\" "
+      "transform=\"rotate(-90 14 {0:.1f})\" text-anchor=\"middle\">{1}</text>\n",
+      mid, html_escape(y_label));
   for (int r = 0; r < 2; ++r) {
     const DeviationProfile& p = *runs[r]->profile;
     std::string points;
@@ -82,15 +76,13 @@ std::string profile_plot(const VerifyReportRun* runs[2], bool angles, const std:
       points += fmt::format("{:.1f},{:.1f} ",
                             x_of((static_cast<double>(k) + 0.5) * p.bin_width_mm()), ax.y(v));
     }
-    svg +=
-        fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
-                    kColour[r], points);
     svg += fmt::format(
-        "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"12\" height=\"3\" fill=\"{}\"/>"
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\">{}</text>\n",
-        kWidth - kRight - 150, kTop + 8 + 16 * r, kColour[r], kWidth - kRight - 132,
-        kTop + 12 + 16 * r, html_escape(runs[r]->label));
+        "<polyline class=\"data\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" "
+        "points=\"{}\"/>\n",
+        kColour[r], points);
   }
+  svg += svg::legend_row(kFrame.left, kFrame.top - 10,
+                         {{kColour[0], runs[0]->label}, {kColour[1], runs[1]->label}});
   svg += "</svg></figure>\n";
   return svg;
 }
@@ -116,7 +108,8 @@ std::string verify_report_html(const VerifyReportInfo& info, const VerifyReportR
       "body{font-family:sans-serif;margin:24px;max-width:820px;color:#222}\n"
       "table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #bbb;padding:3px "
       "8px;text-align:right}\n"
-      "caption{text-align:left;font-weight:bold;padding:4px 0}figure{margin:16px "
+      "caption{text-align:left;font-weight:bold;padding:4px "
+      "0;white-space:nowrap}figure{margin:16px "
       "0}figcaption{font-weight:bold}\n"
       "</style></head><body>\n";
   h += fmt::format(
@@ -140,10 +133,10 @@ std::string verify_report_html(const VerifyReportInfo& info, const VerifyReportR
   }
   h += "</table>\n";
   h += profile_plot(runs, false, "Tool-tip deviation along the path (largest per stretch)",
-                    "deviation, \u00b5m");
+                    "largest deviation, \u00b5m");
   if (info.five_axis)
     h += profile_plot(runs, true, "Tool-axis deviation along the path (largest per stretch)",
-                      "deviation, \u00b5rad");
+                      "largest deviation, \u00b5rad");
   h += worst_table(before);
   h += worst_table(after);
   h += "</body></html>\n";

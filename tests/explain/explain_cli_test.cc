@@ -3,6 +3,7 @@
 // library against identify, the Cartesian machine, and the HTML report
 // loading in headless Chromium without console errors.
 #include "tests/explain/explain_test_support.h"
+#include "tests/support/layout_probe.h"
 
 namespace volmap {
 namespace {
@@ -128,6 +129,33 @@ TEST(ExplainReport, SelfContainedHtmlLoadsInChromiumWithoutConsoleErrors) {
   EXPECT_TRUE(console.empty()) << console;
   EXPECT_NE(dom.find("<svg"), std::string::npos);
   EXPECT_NE(dom.find("reversal"), std::string::npos);
+  // As laid out: the residuals against X position with round ticks between
+  // the extremes, the fitted term drawn over the "before" residuals only,
+  // the parameter written to the digits its standard error supports.
+  const nlohmann::json plots = test::probe_plot_layout(html);
+  test::expect_plots_read_at_a_glance(plots);
+  ASSERT_EQ(plots.size(), 2u);
+  EXPECT_EQ(test::plot_texts(plots, "x-label"),
+            (std::vector<std::string>{"X position, mm", "X position, mm"}));
+  EXPECT_EQ(test::plot_texts(plots, "y-label"),
+            (std::vector<std::string>{"residual, µm", "residual, µm"}));
+  for (int k = 0; k < 2; ++k) {
+    std::size_t fit = 0;
+    for (const auto& m : plots[k]["marks"]) fit += m[0] == "fit";
+    EXPECT_EQ(fit > 0, k == 0) << k;
+  }
+  const test::CliResult js = test::run_volmap("explain --recordings " +
+                                              test::source_path("samples/recordings/reversal.csv") +
+                                              " --machine " + test::source_path(kM3) + " --json -");
+  ASSERT_EQ(js.status, 0) << js.err;
+  const auto doc = nlohmann::json::parse(js.out);
+  const double b = doc["findings"][0]["parameters"]["value_um"],
+               se = doc["findings"][0]["std_errors"]["value_um"];
+  // Two significant digits of the error (0.1 <= se < 1 here: two decimals).
+  ASSERT_TRUE(se >= 0.1 && se < 1.0) << se;
+  char want[64];
+  std::snprintf(want, sizeof want, "value %.2f ± %.2f µm", b, se);
+  EXPECT_NE(page.find(want), std::string::npos) << want;
 }
 
 // The tool of each row (recordings.md tool_mm) sets the tool tip and with

@@ -23,6 +23,7 @@
 #include "maps/tables/table_builder.h"
 #include "tests/support/browser.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/layout_probe.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap::maps {
@@ -150,8 +151,8 @@ TEST(MapReport, PageIsWellFormedSelfContainedAndShowsEverySlice) {
   EXPECT_EQ(page.find("http"), std::string::npos);  // nothing from the network
   EXPECT_EQ(page.find("<script"), std::string::npos);
   for (const char* s :
-       {"Plane XY at Z = 50 mm", "Plane XZ at Y = 50 mm", "Plane YZ at X = 100 mm", "ex (µm)",
-        "ux (µm)", "u, standard uncertainty (µm)", "in-plane error (ex, ey)"})
+       {"Plane XY at Z = 50 mm", "Plane XZ at Y = 50 mm", "Plane YZ at X = 100 mm", "ex, µm",
+        "ux, µm", "u, standard uncertainty, µm", "in-plane error (ex, ey)"})
     EXPECT_NE(page.find(s), std::string::npos) << s;
   // Three slices of 8 colour maps (21 x 11, 21 x 11, 11 x 11 cells) and 3 vector panels.
   EXPECT_EQ(std::count(page.begin(), page.end(), '\n') > 0, true);
@@ -190,6 +191,30 @@ TEST(MapReport, CommandWritesTheReportAndLoadsInChromiumWhenInstalled) {
     test::load_in_chromium((dir / "map.html").string(), dom, console);
     EXPECT_TRUE(console.empty()) << console;
     EXPECT_NE(dom.find("<svg"), std::string::npos);
+    // As laid out: every heatmap with its axes in mm, round ticks and a
+    // colour bar with the component and unit; every arrow in its frame.
+    const nlohmann::json plots = test::probe_plot_layout((dir / "map.html").string());
+    test::expect_plots_read_at_a_glance(plots);
+    EXPECT_EQ(plots.size(), 27u);  // 3 slices x (8 colour maps + arrows)
+    const std::vector<std::string> x = test::plot_texts(plots, "x-label"),
+                                   y = test::plot_texts(plots, "y-label"),
+                                   bar = test::plot_texts(plots, "c-label");
+    ASSERT_EQ(x.size(), 27u);
+    ASSERT_EQ(y.size(), 27u);
+    EXPECT_EQ(bar.size(), 24u);
+    for (std::size_t i = 0; i < 27; ++i) {
+      const char* want[3][2] = {{"X, mm", "Y, mm"}, {"X, mm", "Z, mm"}, {"Y, mm", "Z, mm"}};
+      EXPECT_EQ(x[i], want[i / 9][0]) << i;
+      EXPECT_EQ(y[i], want[i / 9][1]) << i;
+    }
+    for (const char* name : {"ex, µm", "ey, µm", "ez, µm", "|e|, µm", "ux, µm", "uy, µm", "uz, µm",
+                             "u, standard uncertainty, µm"})
+      EXPECT_EQ(std::count(bar.begin(), bar.end(), name), 3) << name;
+    for (std::size_t i = 8; i < 27; i += 9) {  // the arrows: the last plot of each slice
+      std::size_t arrows = 0;
+      for (const auto& m : plots[i]["marks"]) arrows += m[0] == "line";
+      EXPECT_GT(arrows, 0u) << i;
+    }
   }
   fs::remove_all(dir);
 }

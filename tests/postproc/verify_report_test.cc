@@ -13,6 +13,7 @@
 #include "postproc/verify/deviation_profile.h"
 #include "tests/support/browser.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/layout_probe.h"
 #include "tests/support/test_paths.h"
 
 namespace volmap {
@@ -124,6 +125,17 @@ void check_report(const Case& c) {
     test::load_in_chromium(html, dom, console);
     EXPECT_TRUE(console.empty()) << console;
     EXPECT_NE(dom.find("<svg"), std::string::npos);
+    // As laid out: round path lengths, decades of deviation, the last label
+    // inside the plot, the legend clear of the curves.
+    const nlohmann::json plots = test::probe_plot_layout(html);
+    test::expect_plots_read_at_a_glance(plots);
+    ASSERT_EQ(plots.size(), c.five_axis ? 2u : 1u);
+    for (const auto& p : plots) EXPECT_FALSE(p["legend"].is_null());
+    EXPECT_EQ(test::plot_texts(plots, "x-label")[0], "path length, mm");
+    EXPECT_EQ(test::plot_texts(plots, "y-label")[0], "largest deviation, µm");
+    if (c.five_axis) {
+      EXPECT_EQ(test::plot_texts(plots, "y-label")[1], "largest deviation, µrad");
+    }
   }
 }
 
