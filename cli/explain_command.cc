@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "cli/message_wording.h"
+#include "cli/progress.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
 #include "core/explain/explain.h"
@@ -57,6 +58,8 @@ Runner register_explain(CLI::App& app) {
     if (!o->report.empty()) refuse_output_equal_to_input(o->report, inputs);
     if (!o->json.empty() && o->json == o->report)
       throw UsageError("--json and --report name the same file; give two files");
+    TerminalProgress progress("explain");
+    progress.stage("reading " + o->recordings);
     const Recordings rec = load_recordings_csv(o->recordings);
     if (rec.size() == 0)
       throw InputError(o->recordings, 0,
@@ -72,7 +75,11 @@ Runner register_explain(CLI::App& app) {
       opt.baseline = &baseline;
       opt.baseline_file = o->baseline;
     }
+    opt.progress = [&](const std::string& s, std::size_t d, std::size_t t) {
+      progress.stage(s, d, t);
+    };
     ExplainResult res = explain(m, rec, opt);
+    progress.stage("writing");
     // Notes and remedies name options by their fields (`baseline`): the
     // reader of this command's JSON and report types flags.
     for (std::string& note : res.notes) note = flag_wording(note, app, sub);

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "cli/commands.h"
+#include "cli/progress.h"
 #include "core/common/atomic_file.h"
 #include "core/common/input_error.h"
 #include "core/measure/identify.h"
@@ -76,9 +77,14 @@ Runner register_identify(CLI::App& app) {
     if (!o->known.empty()) inputs.push_back(o->known);
     refuse_output_equal_to_input(o->output, inputs);
     const Machine m = load_machine_json(o->machine);
+    TerminalProgress progress("identify");
+    progress.stage("reading " + o->recordings);
     const Recordings rec = load_recordings_csv(o->recordings);
     require_machine_tool_length(rec, m.tool_length_mm, m.name);
     IdentifyOptions opt;
+    opt.progress = [&](const std::string& s, std::size_t d, std::size_t t) {
+      progress.stage(s, d, t);
+    };
     opt.formulation = o->model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
     opt.setup_offsets = o->setup_offsets;
     std::string known_text;

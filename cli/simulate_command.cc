@@ -1,9 +1,12 @@
 // volmap simulate: the real machine in software (docs/simulate.md).
+#include <fmt/format.h>
+
 #include <iostream>
 #include <memory>
 
 #include "cli/commands.h"
 #include "cli/parse_util.h"
+#include "cli/progress.h"
 #include "core/common/atomic_file.h"
 #include "core/measure/effects.h"
 #include "core/measure/plan.h"
@@ -59,7 +62,10 @@ Runner register_simulate(CLI::App& app) {
                                             {"plan", o->plan},
                                             {"instrument", "volmap simulate"}};
     if (effects) meta["effects"] = o->effects;
+    TerminalProgress progress("simulate");
+    progress.stage(fmt::format("simulating {} targets", plan.points.size()));
     const Recordings r = simulate(model, plan, effects.get(), meta);
+    progress.stage("writing " + o->output);
     AtomicOutput out(o->output, inputs);
     write_recordings_csv(out.stream(), r);
     out.commit();

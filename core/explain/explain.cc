@@ -70,11 +70,16 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
     throw std::invalid_argument("ExplainOptions::degree: expected 0 (automatic) or 1..12");
   ExplainResult res;
   res.recordings_file = rec.file;
+  auto stage = [&](const char* what) {
+    if (opt.progress) opt.progress(what, 0, 0);
+  };
+  stage("building the observations");
   const Observations obs = build_observations(m, rec, opt);
   res.observations = obs.count;
   res.runs = static_cast<std::size_t>(obs.run_count);
   const CandidateContext ctx = candidate_context(obs, opt);
 
+  stage("fitting the baseline");
   LinearModel baseline = baseline_model(obs, opt, res.baseline_description);
   fit(obs, baseline);
   res.baseline_rms_um = rms_of(obs, baseline.rss);
@@ -86,6 +91,7 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
   const std::set<std::string> design_blocked = design_confounding(ctx, res.confounded);
   const Selection sel = select_effects(ctx, cands, std::move(baseline), res.baseline_heldout_rms_um,
                                        design_blocked, res.confounded);
+  stage("reporting the findings");
   res.final_rms_um = rms_of(obs, sel.model.rss);
   res.final_heldout_rms_um = sel.heldout_rms_um;
   report_findings(ctx, sel, res);

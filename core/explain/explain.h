@@ -42,6 +42,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -63,6 +64,10 @@ struct ExplainOptions {
   int degree = 0;
   int max_findings = 6;
   bool machine_assumed = false;  ///< the machine is cartesian_machine_for(rec) (no --machine)
+  /// Told each stage of the work ("fitting the baseline"), and the
+  /// candidates of each selection step as they are fitted (done, total;
+  /// total 0 for a stage). May be empty.
+  std::function<void(const std::string& stage, std::size_t done, std::size_t total)> progress;
 };
 
 /// Where the baseline residuals have structure: strength is the adjusted

@@ -1,6 +1,8 @@
 // Forward selection with the backward check (selection.h).
 #include "core/explain/selection.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -84,7 +86,11 @@ class Selector {
   /// Every candidate not taken yet, fitted given the current model.
   std::vector<FittedCandidate> fit_remaining() {
     std::vector<FittedCandidate> fits;
-    for (const Candidate& c : cands_) {
+    const std::string stage =
+        fmt::format("testing the candidates for finding {}", sel_.chosen.size() + 1);
+    for (std::size_t i = 0; i < cands_.size(); ++i) {
+      const Candidate& c = cands_[i];
+      if (options_.progress) options_.progress(stage, i, cands_.size());
       if (used_.count(used_key(c))) continue;
       if (left_out(c, options_, design_blocked_)) continue;
       const auto h = hints_.find(c.key());

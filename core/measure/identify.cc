@@ -118,10 +118,13 @@ class ExactResiduals {
 void gauss_newton(const ExactResiduals& residuals, const EstimatedSet& est,
                   const Eigen::MatrixXd& Js, const Eigen::VectorXd& D, int max_iterations,
                   double step_tolerance, Eigen::VectorXd& theta, Eigen::VectorXd& r,
-                  IdentifyResult& res) {
+                  IdentifyResult& res, const IdentifyOptions& opt) {
   const int Kp = static_cast<int>(est.kept.size());
   double previous_step = INFINITY;
   for (res.iterations = 0; res.iterations < max_iterations && Kp > 0;) {
+    if (opt.progress)
+      opt.progress("Gauss-Newton iteration", static_cast<std::size_t>(res.iterations),
+                   static_cast<std::size_t>(max_iterations));
     Eigen::VectorXd g(Kp);
     for (int a = 0; a < Kp; ++a) g[a] = Js.col(est.kept[static_cast<std::size_t>(a)]).dot(r);
     const Eigen::VectorXd step_s = est.ldlt.solve(g);
@@ -245,6 +248,7 @@ IdentifyResult identify(const Machine& m, const Recordings& rec, const IdentifyO
   if (opt.known) base = *opt.known;
   base.file = opt.known ? opt.known->file : std::string("<identified>");
 
+  if (opt.progress) opt.progress("computing the sensitivities", 0, 0);
   std::vector<ParameterColumn> cols = identification::physical_columns(m, gains, base, opt);
   const Observations obs = identification::gather_observations(m, rec);
   const std::vector<bool> moved = identification::moved_axes(m, obs.u);
@@ -274,7 +278,7 @@ IdentifyResult identify(const Machine& m, const Recordings& rec, const IdentifyO
   for (const Equation& q : obs.equations) weight_sum += q.sqrt_w * q.sqrt_w;
   residuals.evaluate(theta, r);
   res.rms_before_um = std::sqrt(r.squaredNorm() / weight_sum);
-  gauss_newton(residuals, est, Js, D, opt.max_iterations, opt.step_tolerance, theta, r, res);
+  gauss_newton(residuals, est, Js, D, opt.max_iterations, opt.step_tolerance, theta, r, res, opt);
   res.rms_after_um = std::sqrt(r.squaredNorm() / weight_sum);
   res.rows_used = obs.u.size();
   res.equations = obs.equations.size();

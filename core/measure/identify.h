@@ -26,6 +26,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <functional>
 #include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -71,6 +72,9 @@ struct IdentifyOptions {
   double step_tolerance = 1e-10;  ///< um or urad: Gauss-Newton stops below
   double rank_tolerance = 1e-7;   ///< relative singular value of J_s
   double strong_correlation = 0.9;
+  /// Told each stage ("computing the sensitivities") and each Gauss-Newton
+  /// iteration (done, max_iterations; total 0 for a stage). May be empty.
+  std::function<void(const std::string& stage, std::size_t done, std::size_t total)> progress;
 };
 
 enum class ParameterKind : std::uint8_t { kLocation, kComponent, kSetupOffset };

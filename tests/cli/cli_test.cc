@@ -250,6 +250,38 @@ TEST(Cli, VerifyShowsProgressOnATerminalOnly) {
   fs::remove_all(dir);
 }
 
+// simulate, identify and explain show their stages on a terminal too, and
+// write nothing on stderr otherwise.
+TEST(Cli, SimulateIdentifyExplainShowProgressOnATerminalOnly) {
+  namespace fs = std::filesystem;
+  const fs::path dir = volmap::test::fresh_dir("stage_progress");
+  const std::string rec = (dir / "probe.csv").string();
+  const std::string machine = " --machine " + sample("machines/lei-hsu-xyzac.json");
+  const std::string commands[3] = {
+      "simulate" + machine + " --errors " + sample("errors/lei-hsu-xyzac.csv") + " --plan " +
+          sample("plans/probe-ball.json") + " -o " + rec,
+      "identify" + machine + " --recordings " + rec + " -o " + (dir / "id.csv").string(),
+      "explain --machine " + sample("machines/hsu-3axis.json") + " --recordings " +
+          sample("recordings/reversal.csv")};
+  const std::string shown[3] = {"simulate: simulating 64 targets",
+                                "identify: Gauss-Newton iteration (1 of 30)",
+                                "explain: testing the candidates for finding 1 (1 of "};
+  for (int k = 0; k < 3; ++k) {
+    SCOPED_TRACE(commands[k]);
+    const Result plain = run(commands[k]);
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    EXPECT_EQ(plain.err.find(shown[k].substr(0, 10)), std::string::npos) << plain.err;
+    const std::string log = (dir / "tty.txt").string();
+    const int st = std::system(("script -qec '" + volmap::test::volmap_binary() + " " +
+                                commands[k] + "' /dev/null > " + log + " 2>&1")
+                                   .c_str());
+    ASSERT_EQ(WIFEXITED(st) ? WEXITSTATUS(st) : -1, 0);
+    const std::string tty = volmap::test::file_bytes(log);
+    EXPECT_NE(tty.find(shown[k]), std::string::npos) << tty;
+  }
+  fs::remove_all(dir);
+}
+
 // identify's options that do not fit the machine are usage errors (status 2).
 TEST(Cli, IdentifyOptionsThatDoNotFitTheMachineAreUsageErrors) {
   const std::string base = "identify --machine " + sample("machines/hsu-3axis.json") +
