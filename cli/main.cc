@@ -59,7 +59,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    const std::string hint = volmap::cli::misspelling_hint(app, argc, argv);
+    std::string hint = volmap::cli::misspelling_hint(app, argc, argv);
+    if (hint.empty())
+      hint = volmap::cli::flag_value_hint(app, argc, argv,
+                                          dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr);
     std::cerr << "volmap: " << (hint.empty() ? volmap::cli::plain_range(e.what()) : hint)
               << " (see volmap --help)\n";
     return 2;

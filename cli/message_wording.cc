@@ -128,6 +128,37 @@ std::string misspelling_hint(const CLI::App& app, int argc, const char* const* a
   return {};
 }
 
+std::string flag_value_hint(const CLI::App& app, int argc, const char* const* argv, bool extras) {
+  if (argc < 4) return {};
+  const CLI::App* verb = nullptr;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    if (sub->get_name() == argv[1]) verb = sub;
+  if (!verb) return {};
+  // Unless the parser found the word extra, it may be the command's input
+  // (post --json IN): only a command without positional input is sure.
+  if (!extras)
+    for (const CLI::Option* o : verb->get_options())
+      if (o->get_positional()) return {};
+  for (int i = 2; i + 1 < argc; ++i) {
+    const std::string arg = argv[i], next = argv[i + 1];
+    if (arg.rfind("--", 0) != 0 || arg.find('=') != std::string::npos || next.empty() ||
+        next[0] == '-')
+      continue;
+    const CLI::Option* o = nullptr;
+    for (const CLI::Option* c : verb->get_options())
+      for (const std::string& n : c->get_lnames())
+        if ("--" + n == arg) o = c;
+    if (!o || o->get_expected_max() != 0) continue;
+    std::string why = arg + " of volmap " + verb->get_name() + " takes no value, so '" + next +
+                      "' after it was not expected";
+    if (arg == "--json")
+      why += ": it writes the JSON to standard output (redirect it: > " + next +
+             "); only volmap explain's --json names a file";
+    return why;
+  }
+  return {};
+}
+
 std::string plain_range(const std::string& message) {
   // PositiveNumber is Range(smallest positive double, largest double): its
   // bounds printed with std::to_string.

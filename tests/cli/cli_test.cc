@@ -121,6 +121,19 @@ TEST(Cli, MisspellingsSuggestTheNearestName) {
   EXPECT_EQ(r.err, "volmap: --tolerance-um: value -1 must be positive (see volmap --help)\n");
   r = run("frobnicate");
   EXPECT_EQ(r.err, "volmap: 'frobnicate' is not a volmap command (see volmap --help)\n");
+  // --json is a flag everywhere but in explain, where it names a file: a
+  // file after the flag is explained, not merely "not expected".
+  r = run("verify --machine m.json --nominal a.ngc --program b.ngc --json v.json");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err,
+            "volmap: --json of volmap verify takes no value, so 'v.json' after it was not "
+            "expected: it writes the JSON to standard output (redirect it: > v.json); only "
+            "volmap explain's --json names a file (see volmap --help)\n");
+  r = run("post --machine m.json --json p.json in.ngc -o out.ngc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--json of volmap post takes no value, so 'p.json' after it"),
+            std::string::npos)
+      << r.err;
 }
 
 }  // namespace

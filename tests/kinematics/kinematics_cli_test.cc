@@ -124,6 +124,22 @@ TEST(Cli, KinematicsWithErrorsPrintsTheCorrection) {
   EXPECT_EQ(c["method"], "iterated");
 }
 
+// A tool axis tilted 30 degrees: the solution has A at the machine's
+// limit (-100..30 deg) up to rounding (the backward transformation gives
+// 30.000000000000004), which is inside the travel: selected and corrected,
+// not refused (issue 23).
+TEST(Cli, KinematicsAtATravelLimitUpToRoundingIsInside) {
+  const Result r =
+      run(machine_arg("lei-hsu-xyzac") + " --backward 10,20,30,0.5,0,0.8660254037844386 --errors " +
+          test::source_path("samples/errors/lei-hsu-xyzac.csv") + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  const int selected = doc["selected"];
+  const double a_deg = doc["solutions"][selected]["A"];
+  EXPECT_NEAR(a_deg, 30.0, 1e-12);
+  EXPECT_TRUE(doc["correction"]["corrected"].contains("A"));
+}
+
 TEST(Cli, KinematicsErrorsAreOneLineWithStatus1Or2) {
   auto one_line = [](const Result& r) {
     EXPECT_FALSE(r.err.empty());
