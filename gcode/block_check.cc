@@ -152,9 +152,11 @@ void BlockCheck::feed_tool_and_spindle() {
     s_.selected_tool = static_cast<int>(t->value);
   }
   if (m[kMTool]) s_.tool = s_.selected_tool;
-  if (m[kMSpindle])
+  if (m[kMSpindle]) {
     s_.spindle_turning = m[kMSpindle]->code10 == kM3SpindleClockwise ||
                          m[kMSpindle]->code10 == kM4SpindleCounterClockwise;
+    if (s_.spindle_turning) s_.spindle_clockwise = m[kMSpindle]->code10 == kM3SpindleClockwise;
+  }
   if (g[kNonModal] && g[kNonModal]->code10 == kG4Dwell && !word('P'))
     fail(g[kNonModal], "G4 dwell needs a P word (seconds)");
 }
@@ -284,11 +286,15 @@ void BlockCheck::unused_words(bool motion_here) {
     unused(L, arc || (setup_.tool_axis_words && straight),
            setup_.tool_axis_words ? "G0, G1 (tool axis), G2 or G3" : "G2 or G3");
   unused('R', arc || cycle || g10, "G2, G3, G10 or canned cycle");
-  unused('L', cycle || g10, "G10 or canned cycle");
+  // LinuxCNC's L check knows G73 and G81-G89, not G74: an L on a G74
+  // block is refused there (and here).
+  unused('L', (cycle && motion_to_be != kG74LeftHandTap) || g10,
+         "G10 or canned cycle (G74 takes none)");
   unused('P',
          g4 || g64 || g10 || arc || motion_to_be == kG82DrillDwell ||
-             motion_to_be == kG86BoreSpindleStop || motion_to_be == kG89BoreDwell,
-         "G2, G3, G4, G10, G64, G82, G86 or G89");
+             motion_to_be == kG86BoreSpindleStop || motion_to_be == kG89BoreDwell ||
+             motion_to_be == kG84RightHandTap || motion_to_be == kG74LeftHandTap,
+         "G2, G3, G4, G10, G64, G74, G82, G84, G86 or G89");
   unused('Q', g64 || motion_to_be == kG73PeckDrillChipBreak || motion_to_be == kG83PeckDrill,
          "G64, G73 or G83");
 }

@@ -1,4 +1,4 @@
-// Canned cycles (G73 G81 G82 G83 G85 G86 G89) as LinuxCNC reads them: the
+// Canned cycles (G73 G74 G81 G82 G83 G84 G85 G86 G89) as LinuxCNC reads them: the
 // checks of a cycle block, its modal R Z Q, and the holes it drills (L
 // repeats, G90 or G91, polar coordinates).
 #include <fmt/format.h>
@@ -48,6 +48,22 @@ int BlockCheck::cycle_words(int motion_before) {
          "G86 with the spindle stopped; LinuxCNC refuses it (\"Spindle not turning in g86\"): "
          "start it "
          "with M3 or M4 first");
+  // LinuxCNC (convert_cycle_g84, _g74): a tap needs the spindle turning
+  // its way ("Spindle not turning in G84", "Spindle turning
+  // counterclockwise in G84").
+  if (mode == kG84RightHandTap || mode == kG74LeftHandTap) {
+    const bool right = mode == kG84RightHandTap;
+    if (!s_.spindle_turning)
+      fail(g[kMotion], fmt::format("G{} with the spindle stopped; LinuxCNC refuses it (\"Spindle "
+                                   "not turning in G{}\"): start it with {} first",
+                                   right ? 84 : 74, right ? 84 : 74, right ? "M3" : "M4"));
+    if (s_.spindle_clockwise != right)
+      fail(g[kMotion],
+           fmt::format("G{} with the spindle turning {}; LinuxCNC refuses it: a {}-hand tap "
+                       "needs {}",
+                       right ? 84 : 74, right ? "counterclockwise" : "clockwise",
+                       right ? "right" : "left", right ? "M3" : "M4"));
+  }
   // LinuxCNC (convert_cycle) refuses cycles under G93.
   if (s_.feed_mode == kG93InverseTime)
     fail(g[kMotion], "canned cycle under inverse time feed (G93); LinuxCNC refuses it: use G94");

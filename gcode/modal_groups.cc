@@ -17,6 +17,8 @@ int supported_g_group(int code10) {
     case kG81Drill:
     case kG82DrillDwell:
     case kG83PeckDrill:
+    case kG84RightHandTap:
+    case kG74LeftHandTap:
     case kG85Bore:
     case kG86BoreSpindleStop:
     case kG89BoreDwell:
@@ -100,12 +102,13 @@ const char* g_refusal(int code10) {
     case kG33SpindleSynchronised:
     case kG33_1RigidTap:
     case kG76Threading:
-    case kG84RightHandTap:
-    case kG74LeftHandTap:
+      return "spindle-synchronised motion (G33, G33.1, G76) is not supported: its moves are "
+             "tied to the spindle's turns, which a correction would break; tap with the cycles "
+             "G84 or G74, or post the threads uncompensated";
     case kG87BackBore:
     case kG88BoreManualRetract:
-      return "threading and tapping cycles (G33, G76, G84, G74) and G87/G88 are not "
-             "supported; compensation would break spindle synchronisation";
+      return "back boring (G87) and boring with a manual retract (G88) are not supported; "
+             "bore with G85, G86 or G89";
     case kG5CubicSpline:
     case kG5_1QuadraticSpline:
     case kG5_2Nurbs:
@@ -174,7 +177,7 @@ int m_group(int code10, const char** why) {
 }
 
 bool is_cycle(int motion_code10) {
-  return motion_code10 == kG73PeckDrillChipBreak ||
+  return motion_code10 == kG73PeckDrillChipBreak || motion_code10 == kG74LeftHandTap ||
          (motion_code10 >= kG81Drill && motion_code10 <= kG89BoreDwell);
 }
 

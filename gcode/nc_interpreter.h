@@ -111,6 +111,9 @@ struct State {
   /// Spindle turning (M3 or M4 in effect; M5, M19 and the program's end
   /// stop it): LinuxCNC's G86 needs it ("Spindle not turning in g86").
   bool spindle_turning = false;
+  /// The direction it turns (M3: true, M4: false): LinuxCNC's G84 needs
+  /// clockwise, G74 counterclockwise.
+  bool spindle_clockwise = true;
   /// Rotary axes A B C, rad (ProgramSetup::rotary_axes: only those the
   /// machine has move).
   std::array<double, 3> rotary_rad{};

@@ -154,8 +154,8 @@ void ProgramPost::expand_cycle(const nc::Block& b, const nc::BlockEffect& fx, co
         *line_file_, current_line_,
         fmt::format(
             "`expand_cycles` writes out G73 G81 G82 G83 G85 G89 only; this is G{} (it stops "
-            "the spindle); post it without `expand_cycles` (its hole bottom and R plane are "
-            "corrected)",
+            "or reverses the spindle at the bottom); post it without `expand_cycles` (its hole "
+            "bottom and R plane are corrected)",
             code / 10));
   if (s.feed_mode == nc::kG93InverseTime)
     throw InputError(*line_file_, current_line_,

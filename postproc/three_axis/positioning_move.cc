@@ -114,14 +114,16 @@ void ProgramPost::check_cycle_feed(const Corrector& c, const nc::Motion& hole,
                                    const ApproachDirections& d) {
   // The controller feeds straight down from the corrected R plane to the
   // corrected bottom (and pecks back in along it; G85 G89 feed out along
-  // it too): the actual tip along that line against the hole's axis.
+  // it too, and so do the taps G84 G74 after reversing the spindle): the
+  // actual tip along that line against the hole's axis.
   nc::Motion axis;
   axis.kind = nc::MotionKind::kLinear;
   axis.start_mm = Vector3d(hole.end_mm.x(), hole.end_mm.y(), hole.r_mm);
   axis.end_mm = hole.end_mm;
   const Vector3d top_cmd(bottom_cmd.x(), bottom_cmd.y(), r_cmd_mm);
   const int code = interp_.state().motion;
-  const bool feeds_out = code == nc::kG85Bore || code == nc::kG89BoreDwell;
+  const bool feeds_out = code == nc::kG85Bore || code == nc::kG89BoreDwell ||
+                         code == nc::kG84RightHandTap || code == nc::kG74LeftHandTap;
   double worst = 0.0;
   for (const std::int8_t z_dir : {std::int8_t{-1}, std::int8_t{1}}) {
     if (z_dir > 0 && !feeds_out) break;

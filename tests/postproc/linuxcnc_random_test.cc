@@ -61,7 +61,7 @@ TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
     std::vector<std::string> words;
     if (chance(0.35))
       words.push_back(pick({"G0", "G1", "G2", "G3", "G2", "G3", "G81", "G82", "G83", "G73", "G85",
-                            "G89", "G80", "G86", "G1", "G0"}));
+                            "G89", "G80", "G86", "G84", "G74", "G1", "G0"}));
     if (chance(0.15 * wild))
       words.push_back(pick({"G90", "G91",    "G20", "G21", "G17",     "G18",   "G19",
                             "G98", "G99",    "G93", "G94", "G90.1",   "G91.1", "G54",
@@ -74,7 +74,8 @@ TEST(LinuxCnc, RandomProgramsAreAcceptedAndRefusedAsRs274Does) {
     for (const auto& [L, lo, hi] :
          {std::tuple{"Q", -2.0, 5.0}, {"P", -1.0, 3.0}, {"L", -1.0, 4.0}, {"F", -10.0, 500.0}})
       if (chance(0.06 * wild)) words.push_back(L + number(lo, hi));
-    if (chance(0.03 * wild)) words.push_back(pick({"M3 S1000", "M5", "M8", "M9", "M0", "M1"}));
+    if (chance(0.03 * wild))
+      words.push_back(pick({"M3 S1000", "M4 S800", "M5", "M8", "M9", "M0", "M1"}));
     std::shuffle(words.begin(), words.end(), rng);
     std::string b;
     for (const std::string& w : words) b += (b.empty() ? "" : " ") + w;
@@ -168,12 +169,13 @@ std::string random_cam_program(std::mt19937& rng) {
                        kW1[plane], (c1 - pos[kA1[plane]]) / u);
       x = end[0], y = end[1], z = end[2];
     } else if (k < 0.55 && !incremental && plane == 0) {
-      static const char* kCycles[] = {"G81", "G82 P0.2", "G83 Q1.5",        "G73 Q0.7",
-                                      "G85", "G89 P0.1", "M3 S900 G86 P0.3"};
+      static const char* kCycles[] = {
+          "G81",      "G82 P0.2",         "G83 Q1.5",    "G73 Q0.7",        "G85",
+          "G89 P0.1", "M3 S900 G86 P0.3", "M3 S900 G84", "M4 S900 G74 P0.2"};
       const double hz = z - uniform(3, 8), rz = z - uniform(0, 1), nx = x + uniform(-10, 10),
                    ny = y + uniform(-10, 10);
       p += fmt::format("{} {} X{:.4f} Y{:.4f} Z{:.4f} R{:.4f}{}\nG80\nG0 Z{:.4f}\n",
-                       chance(0.5) ? "G98" : "G99", kCycles[integer(0, 6)], nx / u, ny / u, hz / u,
+                       chance(0.5) ? "G98" : "G99", kCycles[integer(0, 8)], nx / u, ny / u, hz / u,
                        rz / u, chance(0.2) ? fmt::format(" L{}", integer(2, 3)) : "", z / u);
       x = nx, y = ny;
     } else if (k < 0.62) {

@@ -207,7 +207,7 @@ TEST(LinuxCnc, ToolLengthOffsetsMoveTheControlledPointAsRs274Does) {
 // post: the radii of an I J K arc may differ by 0.02 sqrt 2 mm (0.002 sqrt 2
 // inch), or by more if that is at most 0.1 % of the radius; an R arc may
 // fall short of half its chord by 0.00005 inch; G86 needs the spindle
-// turning.
+// turning, the taps G84 and G74 turning their way.
 TEST(LinuxCnc, ArcAndCycleLimitsAreLinuxCncs) {
   require_rs274();
   const struct {
@@ -224,6 +224,15 @@ TEST(LinuxCnc, ArcAndCycleLimitsAreLinuxCncs) {
       {"G20 G2 X1.0029 Y0 I0.5 J0", false},
       {"G86 X5 Y5 Z-3 R2 P0.5", false},  // spindle stopped
       {"M3 S1000\nG86 X5 Y5 Z-3 R2 P0.5", true},
+      {"G84 X5 Y5 Z-3 R2", false},                // spindle stopped
+      {"M3 S1000\nG84 X5 Y5 Z-3 R2 P0.2", true},  // P: the dwell at the bottom
+      {"M4 S1000\nG84 X5 Y5 Z-3 R2", false},      // a right-hand tap turning left
+      {"M4 S1000\nG74 X5 Y5 Z-3 R2", true},
+      {"M3 S1000\nG74 X5 Y5 Z-3 R2", false},
+      {"M3 S1000\nG84 X5 Y5 Z-3 R2 L2", true},
+      {"M4 S1000\nG74 X5 Y5 Z-3 R2 L2", false},  // LinuxCNC's L check leaves G74 out
+      {"M3 S1000\nG84 X5 Y5 Z-3 R2 Q1", false},
+      {"M3 S1000\nG84 X5 Y5 Z-3 R2\nM5\nX8", false},  // stopped before the next hole
   };
   const fs::path dir = test::fresh_dir("limits");
   const std::string in = (dir / "limit.ngc").string(), out = (dir / "limit-post.ngc").string();
