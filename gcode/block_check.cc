@@ -104,6 +104,7 @@ void BlockCheck::general_steps() {
         break;
       case kG10SetOffsets:
       case kG92AxisOffset:
+      case kG52LocalOffset:
       case kG92_1AxisOffsetReset:
       case kG92_2AxisOffsetSuspend:
       case kG92_3AxisOffsetRestore:

@@ -77,6 +77,7 @@ int supported_g_group(int code10) {
     case kG92_1AxisOffsetReset:
     case kG92_2AxisOffsetSuspend:
     case kG92_3AxisOffsetRestore:
+    case kG52LocalOffset:
       return kNonModal;
     default:
       return -1;
@@ -92,8 +93,6 @@ const char* g_refusal(int code10) {
     case kG42_1DynamicCutterCompRight:
       return "cutter radius compensation (G41/G42) is not supported: the post-processor "
              "needs the tool centre path; output it from CAM with G40";
-    case kG52LocalOffset:
-      return "G52 local offsets are not supported; use G92 or G10 L2";
     case kG38_2Probe:
     case kG38_3Probe:
     case kG38_4Probe:

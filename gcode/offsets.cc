@@ -8,6 +8,9 @@
 //  - G92 X Y Z: an offset on top of every coordinate system, so that where
 //    the tool stands has those coordinates; the axes not named keep theirs.
 //    G92.1 clears it, G92.2 suspends it, G92.3 applies it again.
+//  - G52 X Y Z: the same offset (LinuxCNC keeps both in #5211-#5213), set
+//    to the values given (program units, absolute under G91 too); the axes
+//    not named keep the offset in effect (zero while suspended); applied.
 // Tool table rows (G10 L1 L10 L11) are refused: give a tool table.
 #include <fmt/format.h>
 
@@ -69,6 +72,12 @@ void BlockCheck::offsets(int code10) {
     }
     s_.g92_applied = true;
     effect_.offsets_from_position = true;
+  } else if (code10 == kG52LocalOffset) {
+    if (!any) fail(self, "G52 needs an axis word (LinuxCNC: \"All axes missing with g52\")");
+    if (!s_.g92_applied) s_.g92_mm.setZero();
+    for (int a = 0; a < 3; ++a)
+      if (const Word* w = word("XYZ"[a])) s_.g92_mm[a] = w->value * s_.unit_mm;
+    s_.g92_applied = true;
   } else {
     if (any) fail(self, "G92.1, G92.2 and G92.3 take no axis words");
     if (code10 == kG92_1AxisOffsetReset) s_.g92_mm.setZero();

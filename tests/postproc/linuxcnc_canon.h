@@ -65,6 +65,10 @@ inline Canon canonical(const std::string& program, const std::string& tool_table
   double unit = 1.0;
   int plane = 0;
   Eigen::Vector3d pos = Eigen::Vector3d::Zero();
+  // rs274 prints positions in the program's coordinates: the G92 offset
+  // (G92, G52) in effect is added, so the points are relative to the work
+  // offset alone.
+  Eigen::Vector3d g92 = Eigen::Vector3d::Zero();
   auto numbers = [](const std::string& l) {
     std::vector<double> v;
     const size_t open = l.find('('), close = l.rfind(')');
@@ -81,11 +85,15 @@ inline Canon canonical(const std::string& program, const std::string& tool_table
     if (line.find("SELECT_PLANE(CANON_PLANE_XZ)") != std::string::npos) plane = 1;
     if (line.find("SELECT_PLANE(CANON_PLANE_YZ)") != std::string::npos) plane = 2;
     if (line.find("rror") != std::string::npos) c.errors += line + "\n";
+    if (line.find("SET_G92_OFFSET(") != std::string::npos) {
+      const std::vector<double> v = numbers(line);
+      g92 = Eigen::Vector3d(v[0], v[1], v[2]) * unit;
+    }
     const bool traverse = line.find("STRAIGHT_TRAVERSE(") != std::string::npos;
     const bool feed = line.find("STRAIGHT_FEED(") != std::string::npos;
     if (traverse || feed) {
       const std::vector<double> v = numbers(line);
-      const Eigen::Vector3d p(v[0] * unit, v[1] * unit, v[2] * unit);
+      const Eigen::Vector3d p = Eigen::Vector3d(v[0], v[1], v[2]) * unit + g92;
       if (feed) {
         nc::Motion m;
         m.kind = nc::MotionKind::kLinear;
@@ -108,9 +116,10 @@ inline Canon canonical(const std::string& program, const std::string& tool_table
       m.end_mm[kFirst[plane]] = v[0] * unit;
       m.end_mm[kSecond[plane]] = v[1] * unit;
       m.end_mm[kAxis[plane]] = v[5] * unit;
+      m.end_mm += g92;
       m.center_mm = pos;
-      m.center_mm[kFirst[plane]] = v[2] * unit;
-      m.center_mm[kSecond[plane]] = v[3] * unit;
+      m.center_mm[kFirst[plane]] = v[2] * unit + g92[kFirst[plane]];
+      m.center_mm[kSecond[plane]] = v[3] * unit + g92[kSecond[plane]];
       const int rotation = static_cast<int>(v[4]);
       m.clockwise = rotation < 0;
       m.extra_turns = std::abs(rotation) - 1;

@@ -81,6 +81,9 @@ TEST(LinuxCnc, Rs274AcceptsPostedProgramsAndTheirMovesAgreeWithTheModel) {
       // the initial G99) in one program each.
       {"tests/data/linuxcnc/polar.ngc", "", "hsu-3axis", {250, 200, 100}},
       {"tests/data/linuxcnc/cycles.ngc", "", "hsu-3axis", {250, 200, 100}},
+      // G52 local offsets of up to 120 mm: the points are where rs274's
+      // offsets put them, so a misread offset moves the error they meet.
+      {"tests/data/linuxcnc/local-offsets.ngc", "", "hsu-3axis", {250, 200, 100}},
       // Arcs kept as arcs (the default): rs274 reads them, its arcs are
       // ours.
       {"tests/data/linuxcnc/arcs.ngc", "", "hsu-3axis", {150, 100, 200}, true},
