@@ -152,7 +152,12 @@ void BlockCheck::feed_tool_and_spindle() {
       fail(t, fmt::format("T must be a non-negative integer up to {}", kMaxToolNumber));
     s_.selected_tool = static_cast<int>(t->value);
   }
-  if (m[kMTool]) s_.tool = s_.selected_tool;
+  if (m[kMTool]) {
+    s_.tool = s_.selected_tool;
+    s_.tool_from_m61 = false;
+  }
+  for (const Word& w : b_.words)
+    if (w.letter == 'M' && w.code10 == kM61SetToolNumber) s_.tool_from_m61 = true;
   if (m[kMSpindle]) {
     s_.spindle_turning = m[kMSpindle]->code10 == kM3SpindleClockwise ||
                          m[kMSpindle]->code10 == kM4SpindleCounterClockwise;
@@ -173,6 +178,11 @@ void BlockCheck::tool_length() {
     if (h && (h->value < 0 || h->value != std::floor(h->value) || h->value > kMaxToolNumber))
       fail(h, fmt::format("H must be a non-negative integer up to {} (a tool number)",
                           kMaxToolNumber));
+    if (!h && s_.tool_from_m61)
+      fail(g[kToolLength],
+           "G43 without H after M61: which tool's offset applies differs between LinuxCNC's "
+           "interpreter (rs274: the tool the last M6 loaded) and a machine (the tool M61 "
+           "named); give the tool with H (G43 H<tool>)");
     const int tool = h ? static_cast<int>(h->value) : s_.tool;
     auto it = setup_.tool_length_mm.find(tool);
     if (it == setup_.tool_length_mm.end())

@@ -86,7 +86,11 @@ struct State {
   /// LinuxCNC, a change of it moves the controlled point, not the axes:
   /// position_mm's Z changes by minus the change.
   double tool_length_mm = 0.0;
-  int tool = 0;           ///< T in the spindle (after M6)
+  int tool = 0;  ///< T in the spindle (after M6)
+  /// M61 set the tool number since the last M6: for a G43 without H,
+  /// LinuxCNC's rs274 then applies the offset of the tool the last M6
+  /// loaded (none before any), a machine that of M61's tool: refused, give H.
+  bool tool_from_m61 = false;
   int selected_tool = 0;  ///< last T word
   /// Canned cycles return to the initial level (G98) or to R (G99).
   /// LinuxCNC's interpreter starts in G99 (its retract mode is zero,

@@ -27,6 +27,19 @@ std::optional<std::string> run_time_parameter(int n) {
 Parameters::Parameters(const Interpreter& interp)
     : interp_(interp), numbered_(kParameterCount, 0.0), frames_(1) {}
 
+namespace {
+// The tool in the spindle (#5400, #<_current_tool>): after M61 LinuxCNC's
+// rs274 still gives the last M6's, a machine M61's; neither is safe to use.
+double current_tool(const State& s) {
+  if (s.tool_from_m61)
+    throw ValueError{
+        "the current tool (#5400, #<_current_tool>) after M61: LinuxCNC's interpreter gives "
+        "the tool the last M6 loaded, a machine the tool M61 named; load it with M6 or write "
+        "the tool number"};
+  return s.tool;
+}
+}  // namespace
+
 void Parameters::load(int number, double value) {
   if (number >= 1 && number < kParameterCount) numbered_[static_cast<size_t>(number)] = value;
 }
@@ -54,7 +67,7 @@ std::optional<double> Parameters::system(int n) const {
     if (k < 9 && a < 3) return s.coord_offset_mm[static_cast<size_t>(k)][a];
     return std::nullopt;  // the stored value (a .var file's, or 0)
   }
-  if (n == 5400) return s.tool;
+  if (n == 5400) return current_tool(s);
   if (n >= 5401 && n <= 5409) return n == 5403 ? s.tool_length_mm : 0.0;
   if (n >= 5420 && n <= 5428) {
     const int a = n - 5420;
@@ -105,7 +118,7 @@ std::optional<double> Parameters::predefined(std::string_view name) const {
     return kCodes[s.coord_system];
   }
   if (name == "_feed") return s.feed;
-  if (name == "_current_tool") return s.tool;
+  if (name == "_current_tool") return current_tool(s);
   if (name == "_selected_tool") return s.selected_tool;
   // LinuxCNC's task runs the program on the machine (1); its previews and
   // rs274 see 0. volmap posts for the machine.

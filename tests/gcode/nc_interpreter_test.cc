@@ -283,6 +283,37 @@ TEST(NcInterpreter, G28ReturnsAsRs274Does) {
   EXPECT_TRUE((fx.motion.end_mm / 25.4).isApprox(Eigen::Vector3d(1, 1, 1), 1e-12));
 }
 
+// M61 sets the tool number without a change: rs274 then applies, for a G43
+// without H, the length of the tool the last M6 loaded (T1 here, not T2),
+// a machine that of M61's tool. Refused until H names the tool or an M6
+// loads one; G43 H2 after M61 applies tool 2's length, as rs274 does.
+TEST(NcInterpreter, G43WithoutHAfterM61IsRefusedAndHNamesTheTool) {
+  nc::ProgramSetup setup;
+  setup.tool_length_mm[1] = 50.0;
+  setup.tool_length_mm[2] = 120.5;
+  nc::Interpreter in(setup, "m61.ngc");
+  nc::BlockEffect fx;
+  int line = 0;
+  for (const char* l : {"G21 G90 G17", "T1 M6", "G43", "M61 Q2"})
+    in.execute(nc::lex_block(l, ++line, "m61.ngc"), fx);
+  EXPECT_EQ(in.state().tool_length_mm, 50.0);
+  try {
+    in.execute(nc::lex_block("G43", ++line, "m61.ngc"), fx);
+    ADD_FAILURE() << "G43 without H after M61 read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("m61.ngc:5:1: G43 without H after M61"), std::string::npos)
+        << e.what();
+  }
+  nc::Interpreter again(setup, "m61.ngc");
+  line = 0;
+  for (const char* l : {"G21 G90 G17", "M61 Q2", "G43 H2"})
+    again.execute(nc::lex_block(l, ++line, "m61.ngc"), fx);
+  EXPECT_EQ(again.state().tool_length_mm, 120.5);
+  again.execute(nc::lex_block("T1 M6", ++line, "m61.ngc"), fx);  // an M6 clears it
+  again.execute(nc::lex_block("G43", ++line, "m61.ngc"), fx);
+  EXPECT_EQ(again.state().tool_length_mm, 50.0);
+}
+
 }  // namespace
 }  // namespace volmap
 
