@@ -61,8 +61,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::string hint = volmap::cli::misspelling_hint(app, argc, argv);
     if (hint.empty())
-      hint = volmap::cli::flag_value_hint(app, argc, argv,
-                                          dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr);
+      hint = volmap::cli::flag_value_hint(
+          app, argc, argv,
+          dynamic_cast<const CLI::ExtrasError*>(&e) ? std::string(e.what()) : std::string());
     std::cerr << "volmap: " << (hint.empty() ? volmap::cli::plain_range(e.what()) : hint)
               << " (see volmap --help)\n";
     return 2;

@@ -128,7 +128,8 @@ std::string misspelling_hint(const CLI::App& app, int argc, const char* const* a
   return {};
 }
 
-std::string flag_value_hint(const CLI::App& app, int argc, const char* const* argv, bool extras) {
+std::string flag_value_hint(const CLI::App& app, int argc, const char* const* argv,
+                            const std::string& extras) {
   if (argc < 4) return {};
   const CLI::App* verb = nullptr;
   for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
@@ -136,7 +137,7 @@ std::string flag_value_hint(const CLI::App& app, int argc, const char* const* ar
   if (!verb) return {};
   // Unless the parser found the word extra, it may be the command's input
   // (post --json IN): only a command without positional input is sure.
-  if (!extras)
+  if (extras.empty())
     for (const CLI::Option* o : verb->get_options())
       if (o->get_positional()) return {};
   for (int i = 2; i + 1 < argc; ++i) {
@@ -149,6 +150,12 @@ std::string flag_value_hint(const CLI::App& app, int argc, const char* const* ar
       for (const std::string& n : c->get_lnames())
         if ("--" + n == arg) o = c;
     if (!o || o->get_expected_max() != 0) continue;
+    // The parser named its extras: the word after the flag must be one (in
+    // `post --clamp IN -o OUT EXTRA`, IN is the input, EXTRA the stray), or
+    // a file for --json (`post --json P.json IN`: P.json took IN's place).
+    const bool json_file =
+        arg == "--json" && next.size() > 5 && next.compare(next.size() - 5, 5, ".json") == 0;
+    if (!extras.empty() && extras.find(next) == std::string::npos && !json_file) continue;
     std::string why = arg + " of volmap " + verb->get_name() + " takes no value, so '" + next +
                       "' after it was not expected";
     if (arg == "--json")

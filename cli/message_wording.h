@@ -23,10 +23,13 @@ std::string misspelling_hint(const CLI::App& app, int argc, const char* const* a
 
 /// For an argument the command line did not expect: when it follows a flag
 /// that takes no value (verify's --json writes to standard output, while
-/// explain's names a file), says so; empty otherwise. `extras`: the parser
-/// found an argument it did not expect (otherwise the hint is given only
-/// for a command that takes no positional input, whatever else failed).
-std::string flag_value_hint(const CLI::App& app, int argc, const char* const* argv, bool extras);
+/// explain's names a file), says so; empty otherwise. `extras`: the
+/// parser's message when it found arguments it did not expect (the hint
+/// then needs the word after the flag among them); empty for any other
+/// parse error, when the hint is given only for a command that takes no
+/// positional input.
+std::string flag_value_hint(const CLI::App& app, int argc, const char* const* argv,
+                            const std::string& extras);
 
 /// CLI11's range message in plain numbers: PositiveNumber's "Value -1 not in
 /// range 0.000000 to 1797...(309 digits)" becomes "value -1 must be

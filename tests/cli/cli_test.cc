@@ -134,6 +134,11 @@ TEST(Cli, MisspellingsSuggestTheNearestName) {
   EXPECT_NE(r.err.find("--json of volmap post takes no value, so 'p.json' after it"),
             std::string::npos)
       << r.err;
+  // The input after a flag is the input: the stray word is the one named.
+  r = run("post --machine m.json --clamp in.ngc -o out.ngc extra.ngc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err.find("--clamp of volmap post takes no value"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("extra.ngc"), std::string::npos) << r.err;
 }
 
 }  // namespace
