@@ -145,10 +145,7 @@ std::string flag_value_hint(const CLI::App& app, int argc, const char* const* ar
     if (arg.rfind("--", 0) != 0 || arg.find('=') != std::string::npos || next.empty() ||
         next[0] == '-')
       continue;
-    const CLI::Option* o = nullptr;
-    for (const CLI::Option* c : verb->get_options())
-      for (const std::string& n : c->get_lnames())
-        if ("--" + n == arg) o = c;
+    const CLI::Option* o = verb->get_option_no_throw(arg);
     if (!o || o->get_expected_max() != 0) continue;
     // The parser named its extras: the word after the flag must be one (in
     // `post --clamp IN -o OUT EXTRA`, IN is the input, EXTRA the stray), or

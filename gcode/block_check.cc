@@ -156,8 +156,7 @@ void BlockCheck::feed_tool_and_spindle() {
     s_.tool = s_.selected_tool;
     s_.tool_from_m61 = false;
   }
-  for (const Word& w : b_.words)
-    if (w.letter == 'M' && w.code10 == kM61SetToolNumber) s_.tool_from_m61 = true;
+  if (m[kMOther] && m[kMOther]->code10 == kM61SetToolNumber) s_.tool_from_m61 = true;
   if (m[kMSpindle]) {
     s_.spindle_turning = m[kMSpindle]->code10 == kM3SpindleClockwise ||
                          m[kMSpindle]->code10 == kM4SpindleCounterClockwise;

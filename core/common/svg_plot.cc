@@ -24,14 +24,16 @@ int decimals_of(double step) {
   return std::clamp(d, 0, 12);
 }
 
-}  // namespace
-
-std::string Ticks::text(double v) const {
+// v with `decimals` digits after the point, never "-0" or "-0.00".
+std::string fixed(double v, int decimals) {
   std::string s = fmt::format("{:.{}f}", v, decimals);
-  if (s.find_first_not_of("-0.") == std::string::npos)
-    s = decimals > 0 ? s.substr(s[0] == '-') : "0";
+  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
   return s;
 }
+
+}  // namespace
+
+std::string Ticks::text(double v) const { return fixed(v, decimals); }
 
 Ticks nice_ticks(double lo, double hi, int target) {
   Ticks t;
@@ -65,9 +67,7 @@ std::string value_with_error(double value, double std_error) {
   const int place = static_cast<int>(std::floor(std::log10(std_error))) - 1;
   const double e = std::round(std_error / std::pow(10.0, place)) * std::pow(10.0, place);
   const int decimals = std::max(0, -place);
-  std::string vs = fmt::format("{:.{}f}", value, decimals);
-  if (vs.find_first_not_of("-0.") == std::string::npos && vs[0] == '-') vs.erase(0, 1);
-  return fmt::format("{} ± {:.{}f}", vs, e, decimals);
+  return fmt::format("{} ± {:.{}f}", fixed(value, decimals), e, decimals);
 }
 
 std::string open_plot(double width, double height, const std::string& title, bool log_y) {
@@ -114,12 +114,14 @@ std::string y_axis(const Frame& f, const Scale& y, const Ticks& t, const std::st
         "text-anchor=\"end\">{5}</text>\n",
         f.left - 4, py, f.left, f.left - 6, py + 3.5, t.text(v));
   }
-  const double mid = f.top + f.height / 2;
-  s += fmt::format(
-      "<text class=\"y-label\" x=\"{0:.1f}\" y=\"{1:.1f}\" font-size=\"11\" "
-      "transform=\"rotate(-90 {0:.1f} {1:.1f})\" text-anchor=\"middle\">{2}</text>\n",
-      label_x, mid, html_escape(label));
-  return s;
+  return s + vertical_label("y-label", label_x, f.top + f.height / 2, label);
+}
+
+std::string vertical_label(const char* cls, double x, double y, const std::string& label) {
+  return fmt::format(
+      "<text class=\"{0}\" x=\"{1:.1f}\" y=\"{2:.1f}\" font-size=\"11\" "
+      "transform=\"rotate(-90 {1:.1f} {2:.1f})\" text-anchor=\"middle\">{3}</text>\n",
+      cls, x, y, html_escape(label));
 }
 
 std::string legend_row(double x, double y,

@@ -64,6 +64,10 @@ std::string x_axis(const Frame& f, const Scale& x, const Ticks& t, const std::st
 std::string y_axis(const Frame& f, const Scale& y, const Ticks& t, const std::string& label,
                    double label_x = 12);
 
+/// A label turned along a vertical axis (reading upwards), centred at
+/// (x, y) px, of class `cls` (`y-label`, a colour bar's `c-label`).
+std::string vertical_label(const char* cls, double x, double y, const std::string& label);
+
 /// A legend in one row starting at (x, y) px: a swatch and a name per entry
 /// (colour, name), in a group of class `legend`.
 std::string legend_row(double x, double y,

@@ -197,8 +197,8 @@ struct SlicePlane {
     }
     return text;
   }
-  // The plot's opening, frame and both axes with round ticks in the axes'
-  // display units.
+  // The plot's opening and both axes with round ticks in the axes' display
+  // units; each panel draws the frame over what it plots.
   std::string svg_open(const std::string& title, bool colour_bar = true) const {
     const svg::Frame f = frame();
     const double a0 = display(ga.axis, ga.start), a1 = display(ga.axis, ga.end);
@@ -206,7 +206,6 @@ struct SlicePlane {
     const svg::Scale sx{a0, a1, X(ga.start), X(ga.end)}, sy{b0, b1, Y(gb.start), Y(gb.end)};
     return "<figure>\n" +
            svg::open_plot(f.right() + (colour_bar ? kRight : 16), f.bottom() + kBottom, title) +
-           svg::frame_rect(f, "none") +
            svg::x_axis(f, sx, svg::nice_ticks(a0, a1, 4),
                        fmt::format("{}, {}", axis_char(ga.axis), unit(ga.axis))) +
            svg::y_axis(f, sy, svg::nice_ticks(b0, b1, 4),
@@ -251,12 +250,7 @@ std::string colour_bar(const svg::Frame& f, double lo, double hi, bool magnitude
         "<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\" stroke=\"#333\"/>"
         "<text class=\"c-tick\" x=\"{3:.1f}\" y=\"{4:.1f}\" font-size=\"10\">{5}</text>\n",
         x + w, y(v), x + w + 3, x + w + 5, y(v) + 3.5, t.text(v));
-  const double lx = x + w + 62, ly = f.top + f.height / 2;
-  h += fmt::format(
-      "<text class=\"c-label\" x=\"{0:.1f}\" y=\"{1:.1f}\" font-size=\"11\" "
-      "transform=\"rotate(-90 {0:.1f} {1:.1f})\" text-anchor=\"middle\">{2}</text></g>\n",
-      lx, ly, html_escape(label));
-  return h;
+  return h + svg::vertical_label("c-label", x + w + 62, f.top + f.height / 2, label) + "</g>\n";
 }
 
 // A colour map of one panel over the plane.
@@ -333,6 +327,7 @@ std::string vector_panel(SlicePlane& plane) {
           "<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"1.2\" fill=\"#333\"/>\n",
           xc - dx, yc - dy, xc + dx, yc + dy, xc + dx, yc + dy);
     }
+  h += svg::frame_rect(plane.frame(), "none");
   h += "</svg>\n";
   h += fmt::format(
       "<figcaption>{}: arrows centred on the nodes, head dotted; the longest, {:.4f} µm, is one "

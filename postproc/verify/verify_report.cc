@@ -61,11 +61,7 @@ std::string profile_plot(const VerifyReportRun* runs[2], bool angles, const std:
         kFrame.left, y, kFrame.right(), y, kFrame.left - 6, y + 3.5, std::pow(10.0, e));
   }
   svg += svg::x_axis(kFrame, x_of, svg::nice_ticks(0.0, length), "path length, mm");
-  const double mid = kFrame.top + kFrame.height / 2;
-  svg += fmt::format(
-      "<text class=\"y-label\" x=\"14\" y=\"{0:.1f}\" font-size=\"11\" "
-      "transform=\"rotate(-90 14 {0:.1f})\" text-anchor=\"middle\">{1}</text>\n",
-      mid, html_escape(y_label));
+  svg += svg::vertical_label("y-label", 14, kFrame.top + kFrame.height / 2, y_label);
   for (int r = 0; r < 2; ++r) {
     const DeviationProfile& p = *runs[r]->profile;
     std::string points;
