@@ -52,6 +52,7 @@ nlohmann::ordered_json summary_json(const post::PostSummaryInfo& info, const pos
       {"points_corrected", r.points_corrected},
       {"max_correction_um", r.max_correction_mm * 1e3},
       {"max_deviation_um", r.max_deviation_mm * 1e3},
+      {"dialect", nc::dialect_name(r.read.dialect.dialect)},
       {"flattened", flattened},
       {"cycle_warning_count", r.cycle_warning_count},
       {"cycle_warnings", warnings}};
@@ -131,6 +132,20 @@ void add_three_axis_output_options(CLI::App& app, Opts& opts) {
                   "written (three axes)");
 }
 
+// The options of the three-axis post, refused with a five-axis machine.
+template <typename Opts>
+void refuse_three_axis_options(const Opts& o) {
+  if (o.expand_cycles) throw UsageError("--expand-cycles is for three-axis programs");
+  if (o.placement.dialect == "fanuc")
+    throw UsageError(
+        "--dialect fanuc is for three-axis programs; five-axis programs are read as LinuxCNC "
+        "G-code or APT");
+  if (o.keep_arcs || o.linearize_arcs)
+    throw UsageError("--keep-arcs and --linearize-arcs are for three-axis programs");
+  if (o.json || !o.report.empty())
+    throw UsageError("--json and --report are for three-axis programs");
+}
+
 Runner register_post(CLI::App& app) {
   struct Opts {
     std::string machine, errors, errors_format = "auto", table, in, out;
@@ -182,11 +197,7 @@ Runner register_post(CLI::App& app) {
   return [o]() -> int {
     const Machine m = load_machine_json(o->machine);
     if (o->five.applies(m)) {
-      if (o->expand_cycles) throw UsageError("--expand-cycles is for three-axis programs");
-      if (o->keep_arcs || o->linearize_arcs)
-        throw UsageError("--keep-arcs and --linearize-arcs are for three-axis programs");
-      if (o->json || !o->report.empty())
-        throw UsageError("--json and --report are for three-axis programs");
+      refuse_three_axis_options(*o);
       return run_five_axis(*o, o->five.place_part(m));
     }
     if (o->errors.empty() && o->table.empty()) throw UsageError("post needs --errors or --table");

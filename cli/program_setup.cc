@@ -23,6 +23,11 @@ void ProgramSetupOptions::add_to(CLI::App& sub) {
   sub.add_option("--subroutine-path", subroutine_path,
                  "Folders (DIR[:DIR...]) where O<name> call finds NAME.ngc (LinuxCNC's "
                  "SUBROUTINE_PATH); default: the program's folder");
+  sub.add_option("--dialect", dialect,
+                 "The program's NC language: auto (default: fanuc when the program opens with a "
+                 "program number O1234 or :1234, else linuxcnc; stderr says which), linuxcnc, "
+                 "fanuc (Fanuc and Haas)")
+      ->check(CLI::IsMember({"auto", "linuxcnc", "fanuc"}));
 }
 
 std::vector<std::string> ProgramSetupOptions::subroutine_dirs(const std::string& program) const {
@@ -46,6 +51,7 @@ std::vector<std::string> ProgramSetupOptions::subroutine_dirs(const std::string&
 
 nc::ProgramSetup ProgramSetupOptions::load(const Machine& m) const {
   nc::ProgramSetup setup;
+  setup.dialect = nc::parse_dialect(dialect);
   if (!var_file.empty()) nc::read_var_file(var_file, setup);
   if (!work_offset.empty()) {
     const AxisVector wo = parse_axis_position(m, work_offset, "--work-offset");
@@ -63,6 +69,10 @@ nc::ProgramSetup ProgramSetupOptions::load(const Machine& m) const {
 
 void print_read_notes(const std::string& in_name, const nc::ReadReport& r,
                       bool flattened_written_as_read) {
+  if (r.dialect.detected)
+    std::cerr << fmt::format("note: {}: read as {} (--dialect auto: {})\n", in_name,
+                             r.dialect.dialect == nc::Dialect::kFanuc ? "Fanuc/Haas" : "LinuxCNC",
+                             r.dialect.reason);
   if (r.leader_lines > 0)
     std::cerr << fmt::format(
         "note: {}: line{} 1{} before the first '%' (tape leader) written as they are, not run\n",

@@ -14,8 +14,9 @@ namespace volmap::cli {
 
 struct ProgramSetupOptions {
   std::string work_offset, var_file, tool_table, initial, subroutine_path;
+  std::string dialect = "auto";
   /// Adds --work-offset, --var-file, --tool-table, --initial-position,
-  /// --subroutine-path.
+  /// --subroutine-path, --dialect.
   void add_to(CLI::App& sub);
   /// Where `O<name> call` finds NAME.ngc: --subroutine-path's folders
   /// (':'-separated), else the folder of `program` (the working folder for

@@ -25,6 +25,7 @@ BlockCheck::BlockCheck(const ProgramSetup& setup, const std::string& file, const
 
 void BlockCheck::run() {
   check_polar_words();
+  if (fanuc()) fanuc_words();
   if (common_block()) return;
   general_steps();
 }
@@ -118,8 +119,12 @@ void BlockCheck::general_steps() {
   // than the modal one (a G81 restated in G81 keeps the modal values).
   const int motion_before = s_.motion;
   if (g[kMotion]) {
-    s_.motion = g[kMotion]->code10;
-    effect_.motion_code = s_.motion;
+    const int code = g[kMotion]->code10;
+    s_.motion = code;
+    if (code == kG0Rapid || code == kG1Linear || is_arc(code)) s_.group01 = code;
+    // Fanuc: G80 ends the cycle, the group 01 motion goes on.
+    if (code == kG80CycleCancel && fanuc()) s_.motion = s_.group01;
+    effect_.motion_code = code;
   }
   if (!is_cycle(s_.motion)) s_.cycle_il_known = false;
   const bool motion_here = motion_in_block(any_axis);
@@ -162,8 +167,9 @@ void BlockCheck::feed_tool_and_spindle() {
                          m[kMSpindle]->code10 == kM4SpindleCounterClockwise;
     if (s_.spindle_turning) s_.spindle_clockwise = m[kMSpindle]->code10 == kM3SpindleClockwise;
   }
-  if (g[kNonModal] && g[kNonModal]->code10 == kG4Dwell && !word('P'))
-    fail(g[kNonModal], "G4 dwell needs a P word (seconds)");
+  if (g[kNonModal] && g[kNonModal]->code10 == kG4Dwell && !word('P') && !dwell_time_given_)
+    fail(g[kNonModal], fanuc() ? "G04 dwell needs X (seconds) or P (milliseconds)"
+                               : "G4 dwell needs a P word (seconds)");
 }
 
 void BlockCheck::tool_length() {
@@ -218,10 +224,19 @@ void BlockCheck::distance_and_coordinate_modes() {
   }
   if (g[kDistance]) s_.absolute = g[kDistance]->code10 == kG90Absolute;
   if (g[kArcDistance]) s_.arc_absolute = g[kArcDistance]->code10 == kG90_1ArcCentreAbsolute;
-  if (g[kReturnMode]) s_.g98 = g[kReturnMode]->code10 == kG98ReturnToInitialLevel;
+  if (g[kReturnMode]) {
+    s_.g98 = g[kReturnMode]->code10 == kG98ReturnToInitialLevel;
+    s_.return_mode_given = true;
+  }
   g53_ = g[kNonModal] && g[kNonModal]->code10 == kG53MachineCoordinates;
   effect_.g53 = g53_;
   if (g53_ && !s_.absolute) fail(g[kNonModal], "G53 needs absolute mode (G90)");
+  // Fanuc: G53 positions at rapid traverse whatever group 01 holds; a
+  // motion code beside it is refused (which one moves is not written).
+  if (g53_ && fanuc() && g[kMotion] && g[kMotion]->code10 != kG0Rapid)
+    fail(g[kMotion],
+         "a motion code other than G00 beside G53; a Fanuc control positions G53 at "
+         "rapid traverse: split the block");
   if (g53_ && polar)
     fail(polar_radius ? polar_radius : polar_angle,
          "polar coordinates (@ ^) with G53; use X and Y");
@@ -292,8 +307,9 @@ void BlockCheck::unused_words(bool motion_here) {
   };
   if (m_reads_words) return;
   const bool straight = motion_to_be == kG0Rapid || motion_to_be == kG1Linear;
+  // (Fanuc: K of a canned cycle is its repeats, canned_cycles.cc.)
   for (char L : {'I', 'J', 'K'})
-    unused(L, arc || (setup_.tool_axis_words && straight),
+    unused(L, arc || (setup_.tool_axis_words && straight) || (L == 'K' && cycle && fanuc()),
            setup_.tool_axis_words ? "G0, G1 (tool axis), G2 or G3" : "G2 or G3");
   unused('R', arc || cycle || g10, "G2, G3, G10 or canned cycle");
   // LinuxCNC's L check knows G73 and G81-G89, not G74: an L on a G74

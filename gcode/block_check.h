@@ -63,6 +63,11 @@ class BlockCheck {
   /// A tool-vector program's new tool axis (I J K of a straight move).
   void straight_tool_axis();
 
+  // fanuc_rules.cc
+  /// The Fanuc dialect's checks of the words (decimal points, G04's X).
+  void fanuc_words();
+  bool fanuc() const { return setup_.dialect == Dialect::kFanuc; }
+
   // canned_cycles.cc
   /// The checks of a cycle block and its modal R Z Q; returns the repeats (L).
   int cycle_words(int motion_before);
@@ -85,6 +90,7 @@ class BlockCheck {
   const bool polar;
   bool consumed_axes_ = false;  ///< G43.1 took the Z word
   bool g53_ = false;
+  bool dwell_time_given_ = false;  ///< Fanuc: G04 X (seconds)
 };
 
 }  // namespace volmap::nc

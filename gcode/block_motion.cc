@@ -61,7 +61,8 @@ void BlockCheck::motion(int motion_before) {
   Motion& mo = effect_.motion;
   mo.start_mm = s_.position_mm;
   mo.feed = s_.feed;
-  const int mode = s_.motion;
+  // Fanuc's G53 positions at rapid traverse (the modal motion stays).
+  const int mode = g53_ && fanuc() ? kG0Rapid : s_.motion;
   bool known_after = true;
   for (int a = 0; a < 3; ++a)
     known_after = known_after && (s_.axis_known[static_cast<size_t>(a)] ||

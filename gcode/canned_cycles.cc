@@ -23,8 +23,27 @@ int BlockCheck::cycle_words(int motion_before) {
   if (s_.plane != 0)
     fail(nullptr, "canned cycles in the G18 or G19 plane are not supported; use G17");
   const Word* l = word('L');
+  if (fanuc()) {
+    // Fanuc 0i: K repeats (L on Haas and older controls); K0/L0 stores the
+    // cycle's data and drills nothing. The return level before any G98 or
+    // G99 is the control's power-on setting, unknown here.
+    if (const Word* k = word('K')) {
+      if (l) fail(k, "K and L in one cycle block; both give the repeats on a Fanuc control");
+      l = k;
+    }
+    if (l && l->value == 0)
+      fail(l, fmt::format("{}0: the control stores the cycle and drills no hole here, which "
+                          "volmap does not follow; give the first hole's block without {}0",
+                          l->letter, l->letter));
+    if (!s_.return_mode_given)
+      fail(g[kMotion] ? g[kMotion] : nullptr,
+           "a canned cycle before any G98 or G99: a Fanuc control returns to the level its "
+           "power-on setting gives, which the program does not say; add G98 (initial level) "
+           "or G99 (R level) to the cycle's first block");
+  }
   if (l && (l->value < 1 || l->value != std::floor(l->value) || l->value > kMaxCycleRepeats))
-    fail(l, fmt::format("L (repeats) must be a positive integer up to {}", kMaxCycleRepeats));
+    fail(l, fmt::format("{} (repeats) must be a positive integer up to {}", l->letter,
+                        kMaxCycleRepeats));
   const int repeats = l ? static_cast<int>(l->value) : 1;
   const bool starts = mode != motion_before;
   if (const Word* z = word('Z'))

@@ -50,6 +50,11 @@ void BlockCheck::home(int code10) {
   // The intermediate point, then the stored position of the axes named (all
   // of them when none is).
   const bool any = word('X') || word('Y') || word('Z') || word('A') || word('B') || word('C');
+  if (!any && fanuc())
+    fail(self, fmt::format("{} without axis words: a Fanuc control returns only the axes the "
+                           "block names (LinuxCNC all of them); name them ({} X0. Y0. Z0. under "
+                           "G91 goes straight up from where the tool stands)",
+                           name, name));
   Eigen::Vector3d end = s_.position_mm;
   unsigned homed = 0;
   for (int a = 0; a < 6; ++a) {

@@ -37,10 +37,23 @@ Interpreter::Interpreter(ProgramSetup setup, std::string file)
   s_.tool_axis = setup_.initial_tool_axis;
 }
 
+void Interpreter::set_dialect(Dialect d) {
+  setup_.dialect = d;
+  if (d != Dialect::kFanuc) return;
+  // Fanuc's G28 goes to the first reference position: machine coordinates
+  // from parameter 1240, zero unless the builder set it (#5161.. of a
+  // parameter file give other values).
+  for (int a = 0; a < 6; ++a)
+    if (!s_.home_known[0][static_cast<size_t>(a)]) {
+      s_.home[0][static_cast<size_t>(a)] = 0.0;
+      s_.home_known[0][static_cast<size_t>(a)] = true;
+    }
+}
+
 bool Interpreter::execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion) {
   // execute()'s short path, less what cannot fail here: no F word, no
   // other letter, the position known, G1 with a feed rate.
-  if (s_.ended || s_.motion != kG1Linear || !s_.position_known ||
+  if (s_.ended || s_.motion != kG1Linear || fanuc() || !s_.position_known ||
       (s_.feed <= 0.0 && s_.feed_mode != kG93InverseTime) || given == 0 || given > 7)
     return false;
   straight_move(work_offset(), value, given, s_, motion);

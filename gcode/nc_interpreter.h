@@ -60,7 +60,14 @@ struct State {
   bool arc_absolute = false;  ///< G90.1
   int plane = 0;              ///< 0 XY, 1 ZX, 2 YZ
   int motion = kG0Rapid;      ///< G code x 10 of the modal motion (G0 G1 G2 G3 G73 G80-G89)
-  int coord_system = 0;       ///< 0 = G54 .. 8 = G59.3
+  /// The last of G0 G1 G2 G3 (x 10): Fanuc keeps canned cycles in a group
+  /// of their own (09), and G80 brings this motion back (LinuxCNC: G80 is a
+  /// motion mode that moves nothing).
+  int group01 = kG0Rapid;
+  /// G98 or G99 given: a Fanuc control's return level before either is
+  /// its power-on setting, which an offline post cannot know.
+  bool return_mode_given = false;
+  int coord_system = 0;  ///< 0 = G54 .. 8 = G59.3
   /// The program's origin, machine mm: the active coordinate system's
   /// offset, plus the G92 offset while it applies.
   Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
@@ -176,6 +183,12 @@ class Interpreter {
   /// true; otherwise it changes nothing and returns false (execute() the
   /// block then). The post-processor's shortcut past a Block.
   bool execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion);
+
+  /// The program's dialect (the reader resolves `auto` before the first
+  /// block). Fanuc: G28's reference position is the machine zero
+  /// (parameter 1240's usual value) where the parameter file gives none.
+  void set_dialect(Dialect d);
+  bool fanuc() const { return setup_.dialect == Dialect::kFanuc; }
 
   const State& state() const { return s_; }
   const ProgramSetup& setup() const { return setup_; }

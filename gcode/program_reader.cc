@@ -85,7 +85,35 @@ bool needs_flattening(std::string_view t) {
   return false;
 }
 
-ProgramReader::ProgramReader(std::istream& in, std::string file, const Interpreter& interp,
+bool fanuc_needs_flattening(std::string_view t) {
+  if (needs_flattening(t)) return true;
+  flatten::NormalizedLine n;
+  flatten::normalize(t, n);
+  const std::string& x = n.text;
+  std::size_t i = !x.empty() && x[0] == '/' ? 1 : 0;
+  if (i < x.size() && x[i] == 'n')
+    while (++i < x.size() && x[i] >= '0' && x[i] <= '9') {
+    }
+  const std::string_view rest = std::string_view(x).substr(i);
+  for (std::string_view kw : {"if[", "while[", "goto", "do", "end"})
+    if (rest.starts_with(kw)) return true;
+  // G65 / G66 anywhere outside comments (normalize() kept them as written).
+  char close = 0;
+  for (std::size_t k = 0; k + 2 < x.size(); ++k) {
+    if (close) {
+      if (x[k] == close) close = 0;
+    } else if (x[k] == '(') {
+      close = ')';
+    } else if (x[k] == 'g') {
+      std::size_t d = k + 1;
+      while (d < x.size() && x[d] == '0') ++d;
+      if (x.compare(d, 2, "65") == 0 || x.compare(d, 2, "66") == 0) return true;
+    }
+  }
+  return false;
+}
+
+ProgramReader::ProgramReader(std::istream& in, std::string file, Interpreter& interp,
                              std::vector<std::string> subroutine_path)
     : in_(in),
       file_(std::move(file)),
@@ -165,6 +193,38 @@ void ProgramReader::find_leader() {
   }
 }
 
+void ProgramReader::choose_dialect() {
+  const Dialect given = interp_.setup().dialect;
+  if (given == Dialect::kAuto) {
+    // The head as find_leader() left it (the leader, not run, skipped).
+    std::string_view head(buf_.data() + begin_, end_ - begin_);
+    for (int k = 0; k < leader_left_; ++k) {
+      const std::size_t e = head.find('\n');
+      head.remove_prefix(e == std::string_view::npos ? head.size() : e + 1);
+    }
+    std::string tail;  // a last line without '\n' at the end of the file is looked at too
+    if (eof_ && !head.empty() && head.back() != '\n') {
+      tail.assign(head);
+      tail += '\n';
+      head = tail;
+    }
+    report_.dialect = detect_dialect(head, leader_left_ + 1);
+  } else {
+    report_.dialect.dialect = given;
+  }
+  interp_.set_dialect(report_.dialect.dialect);
+  fanuc_ = report_.dialect.dialect == Dialect::kFanuc;
+  if (!fanuc_) return;
+  // A macro statement in the head (the first 64 KiB, where a macro
+  // program's text usually is whole): flattened from the first block on.
+  std::string_view head(buf_.data() + begin_, end_ - begin_);
+  while (!head.empty() && !flatten_from_start_) {
+    const std::size_t e = head.find('\n');
+    flatten_from_start_ = fanuc_needs_flattening(head.substr(0, e));
+    head.remove_prefix(e == std::string_view::npos ? head.size() : e + 1);
+  }
+}
+
 void ProgramReader::start_flattening(std::string_view first, bool newline) {
   // The rest of the program in memory: loops and calls go back and forth.
   std::string data(first);
@@ -206,6 +266,11 @@ void ProgramReader::start_flattening(std::string_view first, bool newline) {
   params_ = std::make_unique<flatten::Parameters>(interp_);
   for (const auto& [n, v] : interp_.setup().parameters) params_->load(n, v);
   flat_ = std::make_unique<flatten::Flattener>(*params_, path_);
+  if (fanuc_) {
+    fanuc_variables_ = std::make_unique<flatten::FanucVariables>();
+    for (const auto& [n, v] : interp_.setup().parameters) fanuc_variables_->load(n, v);
+    flat_->set_fanuc(fanuc_variables_.get());
+  }
   flat_->set_max_executed_lines(max_executed_);
   auto source = flatten::make_source(file_, std::move(data), number_);
   report_.flat_source_lines = static_cast<long>(source->size());
@@ -216,6 +281,7 @@ bool ProgramReader::next(ProgramLine& out) {
   if (!started_) {
     started_ = true;
     find_leader();
+    choose_dialect();
     if (report_.byte_order_mark) {
       out = ProgramLine{kByteOrderMark, &file_, 1, false, true, false, false, false, {}};
       return true;
@@ -262,17 +328,27 @@ bool ProgramReader::next(ProgramLine& out) {
   }
   // The usual line: axis words only (read here once, for the post), or no
   // character that could make it more than literal words.
-  if (lex_plain_axis_words(flatten::without_cr(text), out.words)) {
+  // (Fanuc: a number without a point means another thing; the interpreter
+  // reads every block.)
+  if (!fanuc_ && lex_plain_axis_words(flatten::without_cr(text), out.words)) {
     out.plain = true;
     return true;
   }
-  if (!maybe_special(text)) return true;
+  if (!fanuc_ && !maybe_special(text)) return true;
+  if (fanuc_ && is_program_number_line(text)) {
+    // O1001 / :1001: the program's number, which the control stores it
+    // under; nothing to run.
+    out.verbatim = true;
+    return true;
+  }
   if (is_percent_line(text)) {
     if (opened_) closed_ = true;
     opened_ = true;
     return true;
   }
-  if (needs_flattening(text) && !interp_.state().ended) {
+  const bool flatten =
+      fanuc_ ? flatten_from_start_ || fanuc_needs_flattening(text) : needs_flattening(text);
+  if (flatten && !interp_.state().ended) {
     start_flattening(text, newline);
     return next(out);
   }

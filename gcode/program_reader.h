@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "gcode/dialect.h"
 #include "gcode/flatten/flattener.h"
 #include "gcode/flatten/parameters.h"
 #include "gcode/nc_block.h"
@@ -49,13 +50,16 @@ struct ReadReport {
   int flattened_from = 0;      ///< the line where flattening began, 0 if it did not
   long flat_blocks = 0;        ///< lines the flattened part came out as
   long flat_source_lines = 0;  ///< lines of the program it was flattened from
+  DialectChoice dialect;       ///< the dialect read, and why (auto: what decided)
 };
 
 class ProgramReader {
  public:
   /// `interp`: the interpreter the lines go to (the system parameters are
-  /// its state). `subroutine_path`: where O<name> call finds NAME.ngc.
-  ProgramReader(std::istream& in, std::string file, const Interpreter& interp,
+  /// its state; the dialect of its setup, `auto` resolved from the
+  /// program's head before the first line, is set in it).
+  /// `subroutine_path`: where O<name> call finds NAME.ngc.
+  ProgramReader(std::istream& in, std::string file, Interpreter& interp,
                 std::vector<std::string> subroutine_path);
   ~ProgramReader();
 
@@ -77,11 +81,18 @@ class ProgramReader {
   bool physical(std::string_view& text, bool& newline);
   void fill();
   void find_leader();
+  /// The dialect, `auto` resolved (report_.dialect), set in the interpreter.
+  void choose_dialect();
   void start_flattening(std::string_view first, bool newline);
 
   std::istream& in_;
   std::string file_;
-  const Interpreter& interp_;
+  Interpreter& interp_;
+  bool fanuc_ = false;  ///< the dialect (known after the first next())
+  /// Fanuc: the head has macro statements, so the program is flattened
+  /// from its first block (a GOTO may jump back to any block).
+  bool flatten_from_start_ = false;
+  std::unique_ptr<flatten::FanucVariables> fanuc_variables_;
   std::vector<std::string> path_;
   std::vector<char> buf_;
   std::size_t begin_ = 0, end_ = 0;
@@ -103,5 +114,8 @@ class ProgramReader {
 /// Does this line use parameters, expressions or an O-word (outside its
 /// comments)? Then it and all that follow are flattened.
 bool needs_flattening(std::string_view text);
+/// The same for a Fanuc program: also a macro statement (IF, WHILE, DO,
+/// END, GOTO at the block's start) or a macro call (G65, G66).
+bool fanuc_needs_flattening(std::string_view text);
 
 }  // namespace volmap::nc

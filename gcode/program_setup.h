@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include "gcode/dialect.h"
+
 namespace volmap::nc {
 
 /// The largest tool number of a T or H word or a tool table: beyond it a
@@ -51,6 +53,10 @@ struct ProgramSetup {
   /// Rotary axes A B C (rad) and tool axis when the program starts.
   std::array<double, 3> initial_rotary_rad{};
   Eigen::Vector3d initial_tool_axis = Eigen::Vector3d::UnitZ();
+  /// The program's NC language (--dialect): `auto` is resolved by the
+  /// program reader from the program's head (Interpreter::set_dialect);
+  /// an interpreter given no reader reads `auto` as LinuxCNC.
+  Dialect dialect = Dialect::kAuto;
 };
 
 }  // namespace volmap::nc

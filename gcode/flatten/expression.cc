@@ -4,6 +4,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace volmap::nc::flatten {
@@ -69,9 +70,49 @@ int precedence(Op op) {
 
 bool is_letter(char c) { return c >= 'a' && c <= 'z'; }
 
-// a = a op b, as LinuxCNC's execute_binary; the reason it is refused, or
-// nullptr.
-const char* apply(Op op, double& a, double b) {
+bool is_logic(Op op) { return op == Op::kAnd || op == Op::kOr || op == Op::kXor; }
+bool is_comparison(Op op) { return op >= Op::kEq && op <= Op::kLe; }
+
+// Fanuc's rules before the operation (ValueReader's Fanuc constructor):
+// vacant operands, comparisons too close to call, bitwise AND OR XOR on
+// other values than 0 and 1, MOD of negative or fractional values. Sets
+// `a` and returns true when it decided the operation itself.
+bool fanuc_operands(Op op, double& a, double& b, const char*& why) {
+  const bool va = std::isnan(a), vb = std::isnan(b);
+  if ((op == Op::kEq || op == Op::kNe) && (va || vb)) {
+    // The manual's table: #1 EQ #0 holds for a vacant #1, #1 NE 0 too.
+    a = ((va && vb) == (op == Op::kEq)) ? 1.0 : 0.0;
+    return true;
+  }
+  if (va) a = 0.0;  // "<vacant> is 0 in operations and in GE GT LE LT"
+  if (vb) b = 0.0;
+  if (is_comparison(op)) {
+    const double d = std::abs(a - b), scale = std::max({1.0, std::abs(a), std::abs(b)});
+    if (d > 1e-9 * scale && d < kToleranceEqual)
+      why =
+          "a comparison of values closer than 0.0001 but not equal: whether a Fanuc control "
+          "counts them equal depends on its arithmetic; round them first (ROUND, FIX)";
+    else if (d <= 1e-9 * scale)
+      b = a;  // equal to the last bits of a double: equal on the control too
+  }
+  if (is_logic(op) && ((a != 0.0 && a != 1.0) || (b != 0.0 && b != 1.0)))
+    why =
+        "AND, OR or XOR of values other than 0 and 1: a Fanuc control combines the bits of "
+        "the binary integers, LinuxCNC their truth; compare first ([#1 EQ 1] AND ...)";
+  if (op == Op::kMod && (a < 0 || b <= 0 || a != std::floor(a) || b != std::floor(b)))
+    why = "MOD of a negative or fractional value: its result differs between Fanuc controls";
+  if (op == Op::kPower) why = "** is LinuxCNC's power operator, not Fanuc's";
+  return false;
+}
+
+// a = a op b, as LinuxCNC's execute_binary (Fanuc's rules first when
+// `fanuc`); the reason it is refused, or nullptr.
+const char* apply(Op op, double& a, double b, bool fanuc) {
+  if (fanuc) {
+    const char* why = nullptr;
+    if (fanuc_operands(op, a, b, why)) return nullptr;
+    if (why) return why;
+  }
   switch (op) {
     case Op::kPower:
       if (a < 0.0 && std::floor(b) != b) return "a negative number to a non-integer power";
@@ -130,6 +171,8 @@ const char* apply(Op op, double& a, double b) {
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
 
 }  // namespace
+
+bool is_vacant(double v) { return std::isnan(v); }
 
 void normalize(std::string_view line, NormalizedLine& out) {
   out.text.clear();
@@ -199,7 +242,9 @@ double ValueReader::real_value(std::size_t& i) const {
   if (c == '#') return parameter(i);
   if ((c == '+' || c == '-') && c1 != '\0' && !is_digit(c1) && c1 != '.') {
     ++i;
+    const std::size_t at_value = i;
     const double v = real_value(i);
+    if (std::isnan(v)) fail(at_value, "a sign before a vacant variable (never set)");
     return c == '-' ? -v : v;
   }
   if (is_letter(c)) return unary(i);
@@ -209,6 +254,7 @@ double ValueReader::real_value(std::size_t& i) const {
 int ValueReader::integer_value(std::size_t& i) const {
   const std::size_t begin = i;
   const double v = real_value(i);
+  if (std::isnan(v)) fail(begin, "a vacant variable (never set) where a number is needed");
   const double r = std::floor(v + 0.5);
   if (std::abs(v - r) > kToleranceEqual)
     fail(begin, fmt::format("{} is not an integer, and an integer is needed here", v));
@@ -231,6 +277,11 @@ std::string ValueReader::name(std::size_t& i) const {
 double ValueReader::parameter(std::size_t& i) const {
   const std::size_t begin = i++;  // '#'
   try {
+    if (fanuc_) {
+      if (at(i) == '<') fail(begin, "named parameters #<...> are LinuxCNC's, not Fanuc's");
+      const std::optional<double> v = fanuc_->get(integer_value(i));
+      return v ? *v : std::numeric_limits<double>::quiet_NaN();
+    }
     if (at(i) == '<') {
       const std::string n = name(i);
       return p_.get(n);
@@ -264,6 +315,7 @@ double ValueReader::unary(std::size_t& i) const {
   while (is_letter(at(e))) ++e;
   const std::string_view fn = t_.substr(i, e - i);
   i = e;
+  if (fanuc_) return fanuc_function(fn, begin, i);
   if (fn == "exists") {
     if (at(i) != '[' || at(i + 1) != '#') fail(begin, "EXISTS takes a parameter: EXISTS[#<name>]");
     i += 2;
@@ -321,25 +373,51 @@ double ValueReader::unary(std::size_t& i) const {
 }
 
 double ValueReader::expression(std::size_t& i) const {
+  const std::size_t open = i++;
+  return operations(i, open, false);
+}
+
+double ValueReader::statement_value(std::size_t& i) const { return operations(i, i, true); }
+
+double ValueReader::operations(std::size_t& i, std::size_t open, bool to_end) const {
   // LinuxCNC's read_real_expression: operands and operators on two stacks,
   // an operator reduced while the next one does not bind tighter.
-  const std::size_t open = i++;
   std::vector<double> values;
   std::vector<std::pair<Op, std::size_t>> ops;
+  bool logic = false, other = false;  // the operators of this bracket level
   for (;;) {
     values.push_back(real_value(i));
     const std::size_t where = i;
-    const Op op = read_operator(i, open);
+    Op op = Op::kClose;
+    // (A statement's value ends at the line's end or a comment; another
+    // statement or a word after it is the caller's to refuse.)
+    if (!to_end || (at(i) != '\0' && at(i) != '(' && at(i) != '#' && !word_after(i))) {
+      op = read_operator(i, open);
+      if (to_end && op == Op::kClose) fail(where, "a ']' without its '['");
+    }
+    if (op != Op::kClose) (is_logic(op) ? logic : other) = true;
+    if (fanuc_ && logic && other)
+      fail(where,
+           "AND, OR or XOR beside other operators in one bracket: Fanuc binds them like * and "
+           "+, LinuxCNC after the comparisons; bracket each operand ([#1 EQ 1] AND [#2 EQ 2])");
     while (!ops.empty() && precedence(op) <= precedence(ops.back().first)) {
       const double b = values.back();
       values.pop_back();
-      if (const char* why = apply(ops.back().first, values.back(), b)) fail(ops.back().second, why);
+      if (const char* why = apply(ops.back().first, values.back(), b, fanuc_ != nullptr))
+        fail(ops.back().second, why);
       ops.pop_back();
     }
     if (op == Op::kClose) break;
     ops.emplace_back(op, where);
   }
   return values.back();
+}
+
+bool ValueReader::word_after(std::size_t i) const {
+  if (!is_letter(at(i))) return false;
+  for (std::string_view op : {"mod", "and", "xor", "or", "eq", "ne", "gt", "ge", "lt", "le"})
+    if (t_.substr(i, op.size()) == op) return false;
+  return true;
 }
 
 Op ValueReader::read_operator(std::size_t& i, std::size_t open) const {

@@ -160,8 +160,8 @@ bool Flattener::next(FlatLine& out, bool ended) {
       if (pc_.source == 0 && frames_.empty()) return false;
       // (A subroutine file's lines run only inside its sub, which ends it.)
       const Frame& f = frames_.back();
-      static constexpr const char* kEnd[] = {"endsub",    "endwhile", "while",
-                                             "endrepeat", "endif",    "M99"};
+      static constexpr const char* kEnd[] = {"endsub", "endwhile", "while", "endrepeat",
+                                             "endif",  "M99",      "END",   "M99"};
       fail(f.start, static_cast<std::size_t>(-1),
            fmt::format("O{} is not closed: the file ends before its {}; add it", f.label,
                        kEnd[f.kind]));
@@ -174,6 +174,11 @@ bool Flattener::next(FlatLine& out, bool ended) {
     }
     const Position p = pc_;
     ++pc_.line;
+    if (fanuc_) {
+      if (!fanuc_line(p, out)) continue;
+      ++emitted_;
+      return true;
+    }
     const Source& s = *sources_[p.source];
     const std::string_view raw = s.line(p.line);
     OWord o;

@@ -28,6 +28,7 @@
 #include <cstddef>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -85,6 +86,9 @@ class Flattener {
   /// The endless-loop guard (kMaxExecutedLines by default).
   void set_max_executed_lines(long n) { max_executed_ = n; }
   long emitted_lines() const { return emitted_; }
+  /// Reads the program as Fanuc Custom Macro B (fanuc_macro.cc) instead of
+  /// LinuxCNC's O-words; `variables` outlives the flattener.
+  void set_fanuc(FanucVariables* variables) { fanuc_ = variables; }
 
  private:
   struct Position {
@@ -98,12 +102,21 @@ class Flattener {
   };
 
   struct Frame {
-    enum Kind { kCall, kWhile, kDo, kRepeat, kIf, kFanucCall } kind = kCall;
-    std::string label;
-    Position start;   ///< call: where to return; loops: their first line; if: the `if` line
-    Position target;  ///< M98: the label's line
+    enum Kind {
+      kCall,
+      kWhile,
+      kDo,
+      kRepeat,
+      kIf,
+      kFanucCall,
+      kFanucLoop,
+      kFanucMacro
+    } kind = kCall;
+    std::string label;  ///< Fanuc loops: the m of DO m
+    Position start;     ///< call: where to return; loops: their first line; if: the `if` line
+    Position target;    ///< M98, G65: the program number's line
     long remaining = 0;
-    bool taken = false;
+    bool taken = false;  ///< if: a branch ran; Fanuc loops: DO m without WHILE
   };
 
   [[noreturn]] void fail(const Position& p, std::size_t norm_at, const std::string& msg) const;
@@ -131,6 +144,28 @@ class Flattener {
   /// M98 / M99 in the line evaluate() read: true when it was one (done).
   bool fanuc_call(const Position& p);
   double condition(const Position& p, const OWord& o) const;
+  /// The line of program number O<label> (or :<label>) in the program and
+  /// the files read; fails at `at` naming `what` (M98, G65).
+  Position find_program(const Position& p, const std::string& label, std::size_t at,
+                        const char* what);
+  std::optional<Position> locate_program(const std::string& label) const;
+
+  // fanuc_macro.cc
+  /// Is `raw` a program number line (O1234, :1234)? `label`: its number.
+  bool program_label(std::string_view raw, std::string& label) const;
+  /// Runs line p as Fanuc Custom Macro B: true and `out` set when the
+  /// control executes it as a block, false when it was a statement.
+  bool fanuc_line(const Position& p, FlatLine& out);
+  bool fanuc_statement(const Position& p);
+  bool fanuc_condition(const ValueReader& r, std::size_t& i) const;
+  int fanuc_loop_id(const Position& p, std::size_t& i) const;
+  void fanuc_assignment(const Position& p, const ValueReader& r, std::size_t i);
+  void only_comment_from(const Position& p, std::size_t i) const;
+  void push_fanuc_loop(const Position& p, int m, bool do_only);
+  Position fanuc_find_end(const Position& from, int m) const;
+  Position fanuc_goto(const Position& p, long n, std::size_t at);
+  bool fanuc_evaluate(const Position& p);
+  bool fanuc_g65(const Position& p);
 
   Parameters& params_;
   std::vector<std::string> path_;
@@ -150,6 +185,8 @@ class Flattener {
   long executed_ = 0, emitted_ = 0;
   long max_executed_ = kMaxExecutedLines;
   bool break_leaked_ = false, continue_leaked_ = false;  ///< execute_oword()'s LinuxCNC bugs
+  FanucVariables* fanuc_ = nullptr;
+  std::vector<FanucLocals> macro_arguments_;  ///< each G65 frame's, for each of its L calls
 };
 
 }  // namespace volmap::nc::flatten

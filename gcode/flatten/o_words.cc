@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "core/common/input_error.h"
@@ -389,86 +390,6 @@ void Flattener::jump_oword(const Position& p, const OWord& o) {
     const char* end = f.kind == Frame::kDo ? "while" : "endrepeat";
     pc_ = find(p, o.label, {end});
   }
-}
-
-bool Flattener::fanuc_call(const Position& p) {
-  const Token *m98 = nullptr, *m99 = nullptr, *pw = nullptr, *lw = nullptr;
-  for (const Token& tok : tokens_) {
-    if (tok.letter == 'm' && tok.value == 98.0) m98 = &tok;
-    if (tok.letter == 'm' && tok.value == 99.0) m99 = &tok;
-    if (tok.letter == 'p') pw = &tok;
-    if (tok.letter == 'l') lw = &tok;
-  }
-  if (!m98 && !m99) return false;
-  const Token* code = m98 ? m98 : m99;
-  for (const Token& tok : tokens_)
-    if (tok.letter != 0 && tok.letter != 'n' && &tok != code && &tok != pw && &tok != lw)
-      fail(p, tok.begin,
-           fmt::format("M{} with other words in one block; put it on a line of its own",
-                       m98 ? 98 : 99));
-  if (m98 && m99) fail(p, m99->begin, "M98 and M99 in one block");
-  if (m99) {
-    if (pw) fail(p, pw->begin, "M99 P (a jump to a sequence number) is not supported");
-    while (!frames_.empty() && frames_.back().kind != Frame::kCall &&
-           frames_.back().kind != Frame::kFanucCall)
-      frames_.pop_back();
-    if (frames_.empty() || frames_.back().kind != Frame::kFanucCall)
-      fail(p, m99->begin,
-           "M99 outside an M98 subprogram: rs274 ends the program here, other controllers run it "
-           "again from the start; end it with M30 (or M2)");
-    Frame& f = frames_.back();
-    if (--f.remaining > 0) {
-      pc_ = after(f.target);
-    } else {
-      pc_ = f.start;
-      frames_.pop_back();
-    }
-    return true;
-  }
-  auto integer = [&](const Token* tok, const char* what) {
-    const double v = tok->value;
-    if (v != std::floor(v) || v < 0 || v > 99999)
-      fail(p, tok->begin, fmt::format("M98's {} must be a whole number from 0 to 99999", what));
-    return static_cast<long>(v);
-  };
-  if (!pw) fail(p, m98->begin, "M98 without P: give the subprogram's number (M98 P100)");
-  const std::string label = std::to_string(integer(pw, "P"));
-  const long count = lw ? integer(lw, "L") : 1;
-  if (count == 0) return true;  // L0 calls nothing
-  int depth = 0;
-  for (const Frame& f : frames_) depth += f.kind == Frame::kCall || f.kind == Frame::kFanucCall;
-  if (depth >= kMaxCallDepth)
-    fail(p, m98->begin,
-         fmt::format("subprogram calls nested deeper than {} (LinuxCNC's limit)", kMaxCallDepth));
-  // The label: a bare O<n> line of the program.
-  Position target;
-  bool found = false;
-  OWord o;
-  for (std::size_t k = 0; k < sources_.size() && !found; ++k) {
-    const Source& s = *sources_[k];
-    for (Position q{k, 0}; q.line < s.size(); ++q.line) {
-      if (s.line(q.line).find_first_of("oO") == std::string_view::npos) continue;
-      if (read_oword(q, o) && o.keyword.empty() && o.label == label) {
-        target = q;
-        found = true;
-        break;
-      }
-    }
-  }
-  if (!found)
-    fail(p, pw->begin,
-         fmt::format("M98 P{}: the program has no O{} line; add the subprogram "
-                     "(O{} ... M99) after the main program's M30",
-                     label, label, label));
-  Frame f;
-  f.kind = Frame::kFanucCall;
-  f.label = label;
-  f.start = after(p);
-  f.target = target;
-  f.remaining = count;
-  frames_.push_back(f);
-  pc_ = after(target);
-  return true;
 }
 
 }  // namespace volmap::nc::flatten

@@ -17,6 +17,30 @@
 
 namespace volmap::post {
 
+void ProgramPost::line(const nc::ProgramLine& l) {
+  if (l.flattened && !hold_begun_) begin_hold();
+  const bool record = report_.changes.size() < options_.max_recorded_changes;
+  keep_line_ = record;
+  const std::size_t before = out_buffer_.size();
+  if (l.verbatim) {
+    ++report_.lines;
+    line_ending_[0] = '\n';
+    line_ending_size_ = l.newline ? 1 : 0;
+    emit(l.text);
+  } else {
+    line_file_ = l.file ? l.file : &file_;
+    evaluated_ = l.rewritten;
+    line(l.text, l.line, l.newline, l.plain ? &l.words : nullptr);
+    if (interp_.fanuc()) add_decimal_points(l, before);
+  }
+  if (holding_) check_held_line(l, before);
+  if (record) {
+    keep_line_ = false;
+    record_change(l, before);
+    if (out_buffer_.size() >= kFlushAt && !holding_) flush();
+  }
+}
+
 // The flattened part is held back while each of its lines comes out as it
 // went in (finish() may then write the program as read instead).
 void ProgramPost::check_held_line(const nc::ProgramLine& l, std::size_t before) {
@@ -26,6 +50,41 @@ void ProgramPost::check_held_line(const nc::ProgramLine& l, std::size_t before) 
       (!l.newline || out_buffer_.data()[before + n - 1] == '\n'))
     return;
   holding_ = false;
+}
+
+void ProgramPost::add_decimal_points(const nc::ProgramLine& l, std::size_t before) {
+  const std::string_view out(out_buffer_.data() + before, out_buffer_.size() - before);
+  if (out.substr(0, l.text.size()) == l.text) return;  // as read (its ending after it)
+  std::string fixed;
+  fixed.reserve(out.size() + 8);
+  char close = 0;
+  for (std::size_t i = 0; i < out.size();) {
+    const char c = out[i];
+    fixed += c;
+    ++i;
+    if (close) {
+      if (c == close) close = 0;
+      continue;
+    }
+    if (c == '(') {
+      close = ')';
+      continue;
+    }
+    if (c == ';') close = '\n';
+    if (!std::strchr("XYZABCIJKRQxyzabcijkrq", c) || c == '\0') continue;
+    std::size_t k = i;
+    if (k < out.size() && (out[k] == '-' || out[k] == '+')) ++k;
+    bool nonzero = false;
+    const std::size_t digits = k;
+    while (k < out.size() && out[k] >= '0' && out[k] <= '9') nonzero |= out[k++] != '0';
+    if (k == digits || (k < out.size() && out[k] == '.')) continue;
+    fixed.append(out.substr(i, k - i));
+    if (nonzero) fixed += '.';
+    i = k;
+  }
+  if (fixed.size() == out.size()) return;
+  out_buffer_.commit(out_buffer_.data() + before);
+  out_buffer_.append(fixed);
 }
 
 // --report's changed lines: the line as read and what was written for it.

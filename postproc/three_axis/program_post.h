@@ -62,33 +62,13 @@ class ProgramPost {
 
   /// One line of the program as the reader hands it out (a block, or
   /// verbatim text such as tape leader).
-  void line(const nc::ProgramLine& l) {
-    if (l.flattened && !hold_begun_) begin_hold();
-    const bool record = report_.changes.size() < options_.max_recorded_changes;
-    keep_line_ = record;
-    const std::size_t before = out_buffer_.size();
-    if (l.verbatim) {
-      ++report_.lines;
-      line_ending_[0] = '\n';
-      line_ending_size_ = l.newline ? 1 : 0;
-      emit(l.text);
-    } else {
-      line_file_ = l.file ? l.file : &file_;
-      evaluated_ = l.rewritten;
-      line(l.text, l.line, l.newline, l.plain ? &l.words : nullptr);
-    }
-    if (holding_) check_held_line(l, before);
-    if (record) {
-      keep_line_ = false;
-      record_change(l, before);
-      if (out_buffer_.size() >= kFlushAt && !holding_) flush();
-    }
-  }
+  void line(const nc::ProgramLine& l);
   /// `plain`: the line's axis words when the reader read it as a line of
   /// axis words only (nc::lex_plain_axis_words), else nullptr.
   void line(std::string_view text, int number, bool newline,
             const nc::PlainAxisWords* plain = nullptr);
   const nc::Interpreter& interpreter() const { return interp_; }
+  nc::Interpreter& interpreter() { return interp_; }  ///< the reader sets the dialect
   /// The end of the program: a flattened part in which the post changed no
   /// line goes out as it was read (`original_rest`, the reader's), not flat.
   void finish(const std::string& original_rest) {
@@ -402,6 +382,8 @@ class ProgramPost {
   /// PostOptions::max_recorded_changes: line l, when its output (from byte
   /// `before` of the buffer on) is not the line as read, into the report.
   void record_change(const nc::ProgramLine& l, std::size_t before);
+  /// Fanuc: "X5." for "X5" the post wrote (0.005 mm without 3401#0).
+  void add_decimal_points(const nc::ProgramLine& l, std::size_t before);
   /// The flattened part is held back (not flushed) until a line of it
   /// comes out other than it went in: until then, finish() may write the
   /// program as it was read instead.

@@ -151,15 +151,23 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
       previous = x;
       if (!fm.measured) continue;
       const Vector3d actual = x + c.error_with_play(x, h);
-      // Nearest nominal move around the cursor.
+      // Nearest nominal move around the cursor. The cursor follows the
+      // nearest one, but a move beyond the next costs kSkipPenaltyMm per
+      // move skipped: where the path crosses itself (a diagonal back over
+      // the passes just cut) the cursor stays on the move being run, not
+      // on the crossing one ahead, which would leave the window behind.
+      constexpr double kSkipPenaltyMm = 0.05;
       double best = std::numeric_limits<double>::infinity();
+      double best_score = best;
       size_t best_i = cursor;
       const size_t lo = cursor > 2 ? cursor - 2 : 0;
       const size_t hi = std::min(nominal.size(), cursor + 4);
       for (size_t i = lo; i < hi; ++i) {
         const double dist = nc::distance_to_path(nominal[i].motion, actual);
-        if (dist < best) {
-          best = dist;
+        best = std::min(best, dist);
+        const double skipped = i > cursor + 1 ? static_cast<double>(i - cursor - 1) : 0.0;
+        if (const double score = dist + kSkipPenaltyMm * skipped; score < best_score) {
+          best_score = score;
           best_i = i;
         }
       }

@@ -50,6 +50,13 @@ Read read(const std::string& program, std::vector<std::string> path = {},
 }
 
 std::string flat(const std::string& program) { return read(program).out; }
+// Read as LinuxCNC whatever its head (a program number O1001 would make
+// --dialect auto read it as Fanuc).
+std::string flat_linuxcnc(const std::string& program) {
+  nc::ProgramSetup setup;
+  setup.dialect = nc::Dialect::kLinuxCnc;
+  return read(program, {}, setup).out;
+}
 
 std::string error_of(const std::string& program, std::vector<std::string> path = {}) {
   try {
@@ -241,7 +248,7 @@ TEST(Flatten, FanucSubprograms) {
       "#1=[#1+1]\n"
       "G90\n"
       "M99\n";
-  EXPECT_EQ(flat(p),
+  EXPECT_EQ(flat_linuxcnc(p),
             "O1001 (program number)\nG0 X0 Y0 Z0\nG91 G0 X1\nG90\nG91 G0 X2\nG90\n"
             "G0 X3 Y0 Z0\nM30\n");
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nM99\n").find("M30"), std::string::npos);

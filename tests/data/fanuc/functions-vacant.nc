@@ -1,0 +1,24 @@
+%
+O2005 (FUNCTIONS, VACANT VARIABLES)
+G90 G21 G17
+G00 X0. Y0. Z5.
+#1 = -1.2
+#2 = FIX[#1]
+#3 = FUP[#1]
+G01 X#2 Y#3 F100.
+#4 = #30 + 2.
+#5 = #30
+G01 X#4 Y#5
+IF [#5 EQ #0] THEN #6 = 1.
+IF [#30 NE 0] THEN #7 = 1.
+#8 = ROUND[2.5]
+#9 = ATAN[1.]/[1.]
+#10 = SQRT[16.] + ABS[-3.]
+G01 X[#6 + #7] Y#8
+G01 X#9 Y#10
+IF [#30 GE #0] THEN #12 = 5.
+IF [#30 GT 0] THEN #12 = 9.
+G01 X#12 Y0.
+G00 Z5.
+M30
+%

@@ -1,0 +1,19 @@
+%
+O2002 (NESTED WHILE ... DO, IF ... THEN)
+G90 G21 G17
+G00 X0. Y0. Z5.
+G01 Z-1. F100.
+#10 = 0 (ROW)
+WHILE [#10 LE 2] DO1
+#11 = 0
+WHILE [#11 LT 3] DO2
+G01 X[#11 * 10.] Y[#10 * 8.]
+#11 = #11 + 1
+END2
+IF [#10 EQ 1] THEN #12 = 3.
+#10 = #10 + 1
+END1
+G01 X#12 Y0.
+G00 Z5.
+M30
+%
