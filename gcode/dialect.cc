@@ -67,7 +67,8 @@ DialectChoice detect_dialect(std::string_view head, int first_line) {
     const std::string_view t = head.substr(b, e - b);
     std::size_t i = 0;
     while (i < t.size() && blank(t[i])) ++i;
-    const bool skip = i == t.size() || t[i] == '%' || only_comments(t, i);
+    // (';' lines: LinuxCNC's comments, a Fanuc control's empty blocks.)
+    const bool skip = i == t.size() || t[i] == '%' || t[i] == ';' || only_comments(t, i);
     if (!skip) {
       if (is_program_number_line(t)) {
         c.dialect = Dialect::kFanuc;

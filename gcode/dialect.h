@@ -26,7 +26,7 @@ struct DialectChoice {
 };
 
 /// Fanuc when the program's first block (after '%' lines, blank and
-/// comment-only lines) is a program number, `O1234` or `:1234` (with or
+/// comment-only lines, ( ) or ';') is a program number, `O1234` or `:1234` (with or
 /// without a comment after it); LinuxCNC otherwise. A LinuxCNC program
 /// never starts with a bare O number (LinuxCNC's O-words carry a keyword:
 /// `O100 sub`). `head`: the program's first lines (a line cut at the end

@@ -12,6 +12,7 @@
 //   repeats (L on Haas and older controls).
 #include <fmt/format.h>
 
+#include <cstdint>
 #include <cstring>
 
 #include "gcode/block_check.h"
@@ -27,6 +28,24 @@ bool written_with_point(const Block& b, const Word& w) {
 }  // namespace
 
 void BlockCheck::fanuc_words() {
+  // ';' is the end of a block (EOB) as a Fanuc control shows it, not a
+  // comment: alone at the end it ends the block; text after it is refused.
+  char close = 0;
+  for (std::size_t k = 0; k < b_.text.size(); ++k) {
+    const char c = b_.text[k];
+    if (close) {
+      close = c == close ? 0 : close;
+    } else if (c == '(') {
+      close = ')';
+    } else if (c == ';' && b_.text.find_first_not_of(" \t\r;", k) != std::string::npos) {
+      Word at;  // (a place for the message's column)
+      at.begin = static_cast<std::uint32_t>(k);
+      refuse_block(file_, b_, &at,
+                   "';' with text after it: a Fanuc control reads ';' as the end of a block "
+                   "(EOB), not as a comment; put comments in ( ), or give --dialect linuxcnc "
+                   "for a LinuxCNC program");
+    }
+  }
   const bool dwell = (words_.g_mask & (1u << kNonModal)) != 0 && g[kNonModal]->code10 == kG4Dwell;
   const bool motion_word = (words_.g_mask & (1u << kMotion)) != 0;
   const bool cycle = is_cycle(motion_word ? g[kMotion]->code10 : s_.motion);

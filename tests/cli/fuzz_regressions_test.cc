@@ -24,6 +24,7 @@ const std::map<std::string, std::function<void(std::string_view)>>& targets() {
   static const std::map<std::string, std::function<void(std::string_view)>> t = {
       {"nc_reader_fuzz", fuzz::nc_reader},
       {"nc_flatten_fuzz", fuzz::nc_flatten},
+      {"nc_fanuc_fuzz", fuzz::nc_fanuc},
       {"post_fuzz", fuzz::post},
       {"recordings_csv_fuzz", fuzz::recordings_csv},
       {"errors_csv_fuzz", fuzz::errors_csv},

@@ -88,8 +88,9 @@ inline void nc_reader(std::string_view program) {
 // Programs with parameters, expressions and O-word control flow: the
 // program reader flattens them into the interpreter (a bounded number of
 // executed lines: an endless loop is refused, not waited for).
-inline void nc_flatten(std::string_view program) {
+inline void nc_flatten_as(std::string_view program, nc::Dialect dialect) {
   nc::ProgramSetup setup;
+  setup.dialect = dialect;
   setup.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
   setup.initial_position_mm = Eigen::Vector3d(250, 200, 300);
   setup.tool_length_mm[1] = 50.0;
@@ -113,6 +114,10 @@ inline void nc_flatten(std::string_view program) {
   } catch (const InputError&) {
   }
 }
+
+inline void nc_flatten(std::string_view program) { nc_flatten_as(program, nc::Dialect::kAuto); }
+// The same read as Fanuc Custom Macro B (--dialect fanuc).
+inline void nc_fanuc(std::string_view program) { nc_flatten_as(program, nc::Dialect::kFanuc); }
 
 inline void post(std::string_view input) {
   if (input.empty()) return;

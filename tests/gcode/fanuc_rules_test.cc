@@ -72,6 +72,12 @@ TEST(FanucRules, AnAddressWithoutADecimalPointIsRefusedUnlessZero) {
                    10.0);
 }
 
+TEST(FanucRules, ASemicolonEndsTheBlock) {
+  EXPECT_EQ(run("G90 G00 X1. Y2. Z3. ;\n").state.position_mm, Eigen::Vector3d(1, 2, 3));
+  EXPECT_TRUE(has(error_of("G90 G00 X1. Y2. Z3. ; FIRST POINT\n"), "f.nc:1:21: ';' with text"));
+  EXPECT_TRUE(has(error_of("G90 G00 X1. Y2. Z3. (A;B)\n"), "no error"));
+}
+
 TEST(FanucRules, G04TakesItsTimeFromXOrP) {
   const Reading r = run("G90 G00 X1. Y2. Z3.\nG04 X1.5\nG04 P500\nG04 X2\n");
   ASSERT_EQ(r.moves.size(), 1u);
@@ -234,6 +240,8 @@ TEST(FanucRules, AutoReadsAProgramNumberAtTheHeadAsFanuc) {
             nc::Dialect::kLinuxCnc);
   EXPECT_EQ(run("G90 G00 X10 Y0 Z0\n", nc::Dialect::kAuto).report.dialect.dialect,
             nc::Dialect::kLinuxCnc);
+  // ';' lines: comments for LinuxCNC, empty blocks for Fanuc; not a block.
+  EXPECT_EQ(nc::detect_dialect("; TITLE\nO1000\n", 1).dialect, nc::Dialect::kFanuc);
   const nc::DialectChoice c = nc::detect_dialect("(HEAD)\n\nO0123 (X)\n", 1);
   EXPECT_EQ(c.line, 3);
   EXPECT_EQ(c.reason, "program number O0123 at line 3");

@@ -55,10 +55,6 @@ const std::map<std::string, std::string> kReadOnPurpose = {
     {"estlcam-v11-circle-a.gcode", "no program end"},
     {"jscut-jsdc-engrave.gcode", "no program end"},
     {"viaconstructor-simple.ngc", "no program end"},
-    // A UTF-8 byte-order mark (rs274: "Bad character '\357' used"): an
-    // encoding's mark, not the program's; volmap reads past it and writes
-    // it back (the output is refused by rs274 as the input is).
-    {"fanuc-style-o1000-simple-mill-bom.gcode", "byte-order mark"},
 };
 
 struct Program {
