@@ -157,11 +157,11 @@ void BlockCheck::feed_tool_and_spindle() {
       fail(t, fmt::format("T must be a non-negative integer up to {}", kMaxToolNumber));
     s_.selected_tool = static_cast<int>(t->value);
   }
-  if (m[kMTool]) {
+  if (m[kMTool] && m[kMTool]->code10 == kM6ToolChange) {
     s_.tool = s_.selected_tool;
     s_.tool_from_m61 = false;
   }
-  if (m[kMOther] && m[kMOther]->code10 == kM61SetToolNumber) s_.tool_from_m61 = true;
+  if (m[kMTool] && m[kMTool]->code10 == kM61SetToolNumber) s_.tool_from_m61 = true;
   if (m[kMSpindle]) {
     s_.spindle_turning = m[kMSpindle]->code10 == kM3SpindleClockwise ||
                          m[kMSpindle]->code10 == kM4SpindleCounterClockwise;

@@ -144,6 +144,7 @@ int m_group(int code10, const char** why) {
     case kM60PalletPause:
       return kMStop;
     case kM6ToolChange:
+    case kM61SetToolNumber:  // LinuxCNC's modal group 6, with M6 (M61 Q2 M64 P1 is read)
       return kMTool;
     case kM3SpindleClockwise:
     case kM4SpindleCounterClockwise:

@@ -314,6 +314,15 @@ TEST(NcInterpreter, G43WithoutHAfterM61IsRefusedAndHNamesTheTool) {
   EXPECT_EQ(again.state().tool_length_mm, 50.0);
 }
 
+// M61 is in LinuxCNC's modal group 6 with M6: rs274 reads `M61 Q2 M64 P1`
+// and refuses `M6 M61 Q1` ("Two m codes used from same modal group").
+TEST(NcInterpreter, M61SharesItsModalGroupWithM6) {
+  nc::Interpreter in(nc::ProgramSetup{}, "m61.ngc");
+  nc::BlockEffect fx;
+  in.execute(nc::lex_block("M61 Q2 M64 P1", 1, "m61.ngc"), fx);
+  EXPECT_THROW(in.execute(nc::lex_block("M6 M61 Q1", 2, "m61.ngc"), fx), InputError);
+}
+
 }  // namespace
 }  // namespace volmap
 
