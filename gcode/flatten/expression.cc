@@ -174,6 +174,15 @@ bool is_digit(char c) { return c >= '0' && c <= '9'; }
 
 bool is_vacant(double v) { return std::isnan(v); }
 
+bool is_shared_function(std::string_view fn) {
+  static constexpr std::string_view kFunctions[] = {"abs", "acos", "asin", "atan", "cos",
+                                                    "exp", "fix",  "fup",  "ln",   "round",
+                                                    "sin", "sqrt", "tan"};
+  for (std::string_view f : kFunctions)
+    if (f == fn) return true;
+  return false;
+}
+
 void normalize(std::string_view line, NormalizedLine& out) {
   out.text.clear();
   out.column.clear();
@@ -333,12 +342,7 @@ double ValueReader::unary(std::size_t& i) const {
     ++i;
     return exists ? 1.0 : 0.0;
   }
-  static constexpr std::string_view kFunctions[] = {"abs", "acos", "asin", "atan", "cos",
-                                                    "exp", "fix",  "fup",  "ln",   "round",
-                                                    "sin", "sqrt", "tan"};
-  bool known = false;
-  for (std::string_view f : kFunctions) known = known || f == fn;
-  if (!known)
+  if (!is_shared_function(fn))
     fail(begin, fmt::format("unknown function or operator '{}'; LinuxCNC's are ABS ACOS ASIN "
                             "ATAN COS EXP FIX FUP LN ROUND SIN SQRT TAN EXISTS",
                             fn));

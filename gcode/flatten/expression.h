@@ -96,5 +96,9 @@ class ValueReader {
 
 /// Is `v` a vacant Fanuc variable's value (NaN)?
 bool is_vacant(double v);
+/// ABS ACOS ASIN ATAN COS EXP FIX FUP LN ROUND SIN SQRT TAN (lower case):
+/// the unary functions LinuxCNC and Fanuc share (their meanings differ
+/// in places: fanuc_functions.cc).
+bool is_shared_function(std::string_view fn);
 
 }  // namespace volmap::nc::flatten

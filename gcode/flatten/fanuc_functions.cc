@@ -20,12 +20,7 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 }  // namespace
 
 double ValueReader::fanuc_function(std::string_view fn, std::size_t begin, std::size_t& i) const {
-  static constexpr std::string_view kFunctions[] = {"abs", "acos", "asin", "atan", "cos",
-                                                    "exp", "fix",  "fup",  "ln",   "round",
-                                                    "sin", "sqrt", "tan"};
-  bool known = false;
-  for (std::string_view f : kFunctions) known = known || f == fn;
-  if (!known)
+  if (!is_shared_function(fn))
     fail(begin, fmt::format("'{}' is not read: volmap reads the Fanuc functions ABS ACOS ASIN "
                             "ATAN COS EXP FIX FUP LN ROUND SIN SQRT TAN",
                             fn));

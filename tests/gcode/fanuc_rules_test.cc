@@ -13,35 +13,18 @@
 #include "core/common/input_error.h"
 #include "gcode/nc_interpreter.h"
 #include "gcode/program_reader.h"
+#include "tests/support/nc_read.h"
 
 namespace volmap {
 namespace {
 
-struct Reading {
-  std::vector<nc::BlockEffect> moves;  ///< the blocks that moved
-  nc::State state;
-  nc::ReadReport report;
-};
+using Reading = test::NcReading;
 
 Reading run(const std::string& program, nc::Dialect dialect = nc::Dialect::kFanuc,
             nc::ProgramSetup setup = {}) {
   setup.dialect = dialect;
   std::istringstream in(program);
-  nc::Interpreter interp(setup, "f.nc");
-  nc::ProgramReader reader(in, "f.nc", interp, {});
-  Reading r;
-  nc::ProgramLine l;
-  nc::BlockEffect fx;
-  while (reader.next(l)) {
-    if (l.verbatim) continue;
-    nc::Block b = nc::lex_block(nc::flatten::without_cr(l.text), l.line, *l.file);
-    b.evaluated = l.rewritten;
-    interp.execute(b, fx);
-    if (fx.has_motion) r.moves.push_back(fx);
-  }
-  r.state = interp.state();
-  r.report = reader.report();
-  return r;
+  return test::read_nc(in, "f.nc", setup);
 }
 
 std::string error_of(const std::string& program, nc::Dialect d = nc::Dialect::kFanuc,

@@ -16,6 +16,7 @@
 #include "gcode/nc_interpreter.h"
 #include "gcode/program_reader.h"
 #include "tests/support/cli_in_source.h"
+#include "tests/support/nc_read.h"
 
 namespace volmap {
 namespace {
@@ -31,21 +32,9 @@ struct Read {
 Read read(const std::string& program, std::vector<std::string> path = {},
           nc::ProgramSetup setup = {}) {
   std::istringstream in(program);
-  nc::Interpreter interp(setup, "p.ngc");
-  nc::ProgramReader reader(in, "p.ngc", interp, std::move(path));
-  Read r;
-  nc::ProgramLine l;
-  nc::BlockEffect fx;
-  while (reader.next(l)) {
-    r.out.append(l.text);
-    if (l.newline) r.out += '\n';
-    if (l.verbatim) continue;
-    nc::Block b = nc::lex_block(l.text, l.line, *l.file);
-    b.evaluated = l.rewritten;
-    interp.execute(b, fx);
-    if (fx.has_motion) r.ends.push_back(fx.motion.end_mm);
-  }
-  r.report = reader.report();
+  const test::NcReading n = test::read_nc(in, "p.ngc", setup, std::move(path));
+  Read r{n.out, {}, n.report};
+  for (const nc::BlockEffect& fx : n.moves) r.ends.push_back(fx.motion.end_mm);
   return r;
 }
 

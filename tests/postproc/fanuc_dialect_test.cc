@@ -22,6 +22,7 @@
 #include "tests/postproc/linuxcnc_canon.h"
 #include "tests/support/cli_in_source.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/nc_read.h"
 #include "tests/support/samples.h"
 #include "tests/support/test_paths.h"
 
@@ -45,19 +46,10 @@ std::vector<Eigen::Vector3d> distinct(const std::vector<Eigen::Vector3d>& p) {
 // detected), program coordinates.
 std::vector<Eigen::Vector3d> volmap_points(const fs::path& program) {
   std::ifstream in(program, std::ios::binary);
-  nc::Interpreter interp(nc::ProgramSetup{}, program.string());
-  nc::ProgramReader reader(in, program.string(), interp, {kDir.string()});
+  const test::NcReading r = test::read_nc(in, program.string(), {}, {kDir.string()});
+  EXPECT_EQ(r.report.dialect.dialect, nc::Dialect::kFanuc);
   std::vector<Eigen::Vector3d> ends;
-  nc::ProgramLine l;
-  nc::BlockEffect fx;
-  while (reader.next(l)) {
-    if (l.verbatim) continue;
-    nc::Block b = nc::lex_block(nc::flatten::without_cr(l.text), l.line, *l.file);
-    b.evaluated = l.rewritten;
-    interp.execute(b, fx);
-    if (fx.has_motion) ends.push_back(fx.motion.end_mm);
-  }
-  EXPECT_EQ(reader.report().dialect.dialect, nc::Dialect::kFanuc);
+  for (const nc::BlockEffect& fx : r.moves) ends.push_back(fx.motion.end_mm);
   return ends;
 }
 
