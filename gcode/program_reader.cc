@@ -86,6 +86,7 @@ bool needs_flattening(std::string_view t) {
 }
 
 bool fanuc_needs_flattening(std::string_view t) {
+  if (is_program_number_line(t)) return false;  // (the reader's: written as it is)
   if (needs_flattening(t)) return true;
   flatten::NormalizedLine n;
   flatten::normalize(t, n);
@@ -269,7 +270,7 @@ void ProgramReader::start_flattening(std::string_view first, bool newline) {
   if (fanuc_) {
     fanuc_variables_ = std::make_unique<flatten::FanucVariables>();
     for (const auto& [n, v] : interp_.setup().parameters) fanuc_variables_->load(n, v);
-    flat_->set_fanuc(fanuc_variables_.get());
+    flat_->set_fanuc(fanuc_variables_.get(), flatten_from_start_);
   }
   flat_->set_max_executed_lines(max_executed_);
   auto source = flatten::make_source(file_, std::move(data), number_);

@@ -183,10 +183,22 @@ void Flattener::push_fanuc_loop(const Position& p, int m, bool do_only) {
 
 void Flattener::only_comment_from(const Position& p, std::size_t i) const {
   const std::string& t = norm_.text;
-  if (i < t.size() && t[i] != '(')
+  if (i < t.size() && t[i] == ';')
+    fanuc_end_of_block(p, i);
+  else if (i < t.size() && t[i] != '(')
     fail(p, i,
          "more after a macro statement: a Fanuc block holds one; put the rest on a line "
          "of its own");
+}
+
+void Flattener::fanuc_end_of_block(const Position& p, std::size_t i) const {
+  // ';' is a Fanuc block's end (EOB), not a comment: text after it would
+  // be another block on the control.
+  if (norm_.text.find_first_not_of(';', i) != std::string::npos)
+    fail(p, i,
+         "';' with text after it: a Fanuc control reads ';' as the end of a block (EOB), not "
+         "as a comment; put comments in ( ), or give --dialect linuxcnc for a LinuxCNC "
+         "program");
 }
 
 bool Flattener::fanuc_condition(const ValueReader& r, std::size_t& i) const {
@@ -290,7 +302,7 @@ Flattener::Position Flattener::fanuc_goto(const Position& p, long n, std::size_t
     if (numbered(k)) target = k;
   if (target == end) {
     const std::string where =
-        p.source == 0 && begin == 0 && s.first_line > 1
+        p.source == 0 && begin == 0 && s.first_line > 1 && !whole_program_
             ? fmt::format(
                   " from line {} on (volmap reads the lines before line {} once, as they "
                   "come: a jump back before the first macro statement is not followed)",
@@ -330,6 +342,9 @@ bool Flattener::fanuc_evaluate(const Position& p) {
         const std::size_t e = close == std::string::npos ? t.size() : close + 1;
         tokens_.push_back({i, e});
         i = e;
+      } else if (c == ';') {
+        fanuc_end_of_block(p, i);
+        i = t.size();
       } else if (c == '#') {
         throw ValueError{
             "a macro statement beside NC words: a Fanuc block holds one or the "

@@ -87,8 +87,13 @@ class Flattener {
   void set_max_executed_lines(long n) { max_executed_ = n; }
   long emitted_lines() const { return emitted_; }
   /// Reads the program as Fanuc Custom Macro B (fanuc_macro.cc) instead of
-  /// LinuxCNC's O-words; `variables` outlives the flattener.
-  void set_fanuc(FanucVariables* variables) { fanuc_ = variables; }
+  /// LinuxCNC's O-words; `variables` outlives the flattener. `whole`: the
+  /// main program is flattened from its first block (every GOTO target is
+  /// in it).
+  void set_fanuc(FanucVariables* variables, bool whole) {
+    fanuc_ = variables;
+    whole_program_ = whole;
+  }
 
  private:
   struct Position {
@@ -161,6 +166,8 @@ class Flattener {
   int fanuc_loop_id(const Position& p, std::size_t& i) const;
   void fanuc_assignment(const Position& p, const ValueReader& r, std::size_t i);
   void only_comment_from(const Position& p, std::size_t i) const;
+  /// A ';' at i: the block's end; text after it refused.
+  void fanuc_end_of_block(const Position& p, std::size_t i) const;
   void push_fanuc_loop(const Position& p, int m, bool do_only);
   Position fanuc_find_end(const Position& from, int m) const;
   Position fanuc_goto(const Position& p, long n, std::size_t at);
@@ -186,6 +193,7 @@ class Flattener {
   long max_executed_ = kMaxExecutedLines;
   bool break_leaked_ = false, continue_leaked_ = false;  ///< execute_oword()'s LinuxCNC bugs
   FanucVariables* fanuc_ = nullptr;
+  bool whole_program_ = false;
   std::vector<FanucLocals> macro_arguments_;  ///< each G65 frame's, for each of its L calls
 };
 

@@ -46,7 +46,10 @@ struct Canon {
 };
 
 // Runs rs274 on a program and reads its canonical calls.
-inline Canon canonical(const std::string& program, const std::string& tool_table) {
+/// `var_file` (a copy is given to rs274, which may write it back): the
+/// parameters it starts from (work offsets, G28/G30 homes).
+inline Canon canonical(const std::string& program, const std::string& tool_table,
+                       const std::string& var_file = "") {
   // Written under this test run's temporary folder, never beside the program
   // (LinuxCNC's own programs are in a system folder other runs share).
   static const fs::path dir = test::fresh_dir("canon");
@@ -54,12 +57,29 @@ inline Canon canonical(const std::string& program, const std::string& tool_table
   const std::string out =
       (dir / (std::to_string(++count) + "-" + fs::path(program).filename().string() + ".canon"))
           .string();
+  std::string var_option;
+  if (!var_file.empty()) {
+    // A short name: rs274 cuts a long one (about 100 characters) and then
+    // starts from zeros.
+    const std::string copy = (dir / (std::to_string(count) + ".var")).string();
+    fs::copy_file(var_file, copy, fs::copy_options::overwrite_existing);
+    var_option = "-v " + copy + " ";
+  }
   const std::string cmd = "cd " + fs::path(program).parent_path().string() + " && " +
                           test::rs274_command((tool_table.empty() ? "" : "-t " + tool_table + " ") +
-                                              "-g " + program + " " + out) +
+                                              var_option + "-g " + program + " " + out) +
                           " >" + out + ".log 2>&1";
   Canon c;
   c.ok = std::system(cmd.c_str()) == 0;
+  if (!var_file.empty()) {  // a parameter file rs274 could not read or write back
+    std::ifstream log(out + ".log");
+    for (std::string l; std::getline(log, l);)
+      if (l.find("ariable file") != std::string::npos ||
+          l.find("arameter file") != std::string::npos) {
+        c.ok = false;
+        c.errors += l + "\n";
+      }
+  }
   std::ifstream f(out);
   std::string line;
   double unit = 1.0;

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -80,14 +81,14 @@ std::vector<Program> manifest() {
 
 // rs274 with a tool table (tools 1-30, length 0) and the corpus's
 // subroutine folder.
-Canon rs274_read(const std::string& program, const fs::path& dir) {
+Canon rs274_read(const std::string& program, const fs::path& dir, const std::string& var = "") {
   static const std::string tbl = [&] {
     const std::string t = (dir / "tools.tbl").string();
     std::ofstream o(t);
     for (int k = 1; k <= 30; ++k) o << fmt::format("T{0} P{0} Z0 D0 ;\n", k);
     return t;
   }();
-  return canonical(program, tbl);
+  return canonical(program, tbl, var);
 }
 
 TEST(RealPrograms, PostedAsRs274RunsThemOrRefusedAtTheLine) {
@@ -129,18 +130,39 @@ TEST(RealPrograms, PostedAsRs274RunsThemOrRefusedAtTheLine) {
     // G28's and G30's stored positions where rs274 has them: the program's
     // origin (its G54 is zero, its homes are zero).
     const std::string var = out + ".var";
+    // For a program with G53: rs274 with the same G54 (#5221-#5223) as
+    // volmap's --work-offset, so that a G53 move goes to the same machine
+    // point in both (rs274's points stay in program coordinates). Not for
+    // the others: rs274 starts at machine zero, which --initial-position
+    // 0,0,0 matches only while its G54 is zero. rs274 wants the numbers in
+    // order.
+    const std::string rs274_var = out + ".rs274.var";
+    std::string text = test::file_bytes(in);
+    std::transform(text.begin(), text.end(), text.begin(), ::toupper);
+    const bool g53 = text.find("G53") != std::string::npos;
+    const std::string g53_var = g53 ? rs274_var : "";
+    // Where rs274 starts, machine zero, in program coordinates.
+    const Eigen::Vector3d start = g53 ? Eigen::Vector3d(-wo) : Eigen::Vector3d::Zero();
+    const std::string initial =
+        fmt::format(" --initial-position {:.4f},{:.4f},{:.4f}", start.x(), start.y(), start.z());
     {
-      std::ofstream v(var);
+      std::map<int, double> homes, with_g54;
       for (int a = 0; a < 6; ++a)
-        for (int first : {5161, 5181})
-          v << fmt::format("{} {:.6f}\n", first + a, a < 3 ? wo[a] : 0.0);
+        for (int first : {5161, 5181}) homes[first + a] = a < 3 ? wo[a] : 0.0;
+      with_g54 = homes;
+      for (int a = 0; a < 3; ++a) with_g54[5221 + a] = wo[a];
+      std::ofstream v(var), r(rs274_var);
+      for (const auto& [n, x] : homes) v << fmt::format("{} {:.6f}\n", n, x);
+      // (rs274 without an INI file reads a parameter file in inches; the
+      // rotary axes' values are zero.)
+      for (const auto& [n, x] : with_g54) r << fmt::format("{} {:.8f}\n", n, x / 25.4);
     }
     const std::string cmd =
         test::volmap_binary() + " post --machine " + machine + " --errors " + errors +
-        fmt::format(" --work-offset {:.4f},{:.4f},{:.4f}", wo.x(), wo.y(), wo.z()) +
-        " --clamp --initial-position 0,0,0 --var-file " + var + " --tool-table " +
-        (dir / "mm.tbl").string() + " --subroutine-path " + (kDir / "subs").string() + " " + in +
-        " -o " + out + " 2>" + out + ".err";
+        fmt::format(" --work-offset {:.4f},{:.4f},{:.4f}", wo.x(), wo.y(), wo.z()) + " --clamp" +
+        initial + " --var-file " + var + " --tool-table " + (dir / "mm.tbl").string() +
+        " --subroutine-path " + (kDir / "subs").string() + " " + in + " -o " + out + " 2>" + out +
+        ".err";
     const bool ok = std::system(cmd.c_str()) == 0;
     const std::string err = test::file_bytes(out + ".err");
     if (!ok) {
@@ -164,10 +186,10 @@ TEST(RealPrograms, PostedAsRs274RunsThemOrRefusedAtTheLine) {
       ++fanuc_verified;
       const test::CliResult v = test::run_volmap(
           "verify --machine " + machine + " --errors " + errors +
-          fmt::format(" --work-offset {:.4f},{:.4f},{:.4f}", wo.x(), wo.y(), wo.z()) +
-          " --clamp --initial-position 0,0,0 --var-file " + var + " --tool-table " +
-          (dir / "mm.tbl").string() + " --subroutine-path " + (kDir / "subs").string() +
-          " --nominal " + in + " --program " + out + " --json --tolerance-um 1.25");
+          fmt::format(" --work-offset {:.4f},{:.4f},{:.4f}", wo.x(), wo.y(), wo.z()) + " --clamp" +
+          initial + " --var-file " + var + " --tool-table " + (dir / "mm.tbl").string() +
+          " --subroutine-path " + (kDir / "subs").string() + " --nominal " + in + " --program " +
+          out + " --json --tolerance-um 1.25");
       EXPECT_EQ(v.status, 0) << v.err;
       std::printf("%-42s %-28s verify %s\n", p.file.c_str(), p.generator.substr(0, 28).c_str(),
                   v.out.substr(0, 120).c_str());
@@ -180,9 +202,10 @@ TEST(RealPrograms, PostedAsRs274RunsThemOrRefusedAtTheLine) {
     }
     EXPECT_FALSE(kNotYet.contains(p.file)) << "posted now: take it off kNotYet";
     ++read_by_both;
-    const Canon after = rs274_read(out, dir);
+    const Canon after = rs274_read(out, dir, g53_var);
+    const Canon nominal_run = rs274_read(in, dir, g53_var);
     EXPECT_TRUE(after.ok && after.errors.empty()) << "rs274 refuses the output: " << after.errors;
-    std::vector<nc::Motion> nominal = before.feeds;
+    std::vector<nc::Motion> nominal = nominal_run.feeds;
     for (nc::Motion& mo : nominal) {
       mo.start_mm += wo;
       mo.end_mm += wo;
