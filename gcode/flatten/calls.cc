@@ -13,7 +13,10 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <optional>
+#include <sstream>
 
 #include "core/common/input_error.h"
 #include "gcode/flatten/flattener.h"
@@ -90,14 +93,41 @@ std::optional<Flattener::Position> Flattener::locate_program(const std::string& 
   return std::nullopt;
 }
 
+std::optional<Flattener::Position> Flattener::load_program_file(const std::string& label) {
+  // A Fanuc control keeps its macros and subprograms as programs of their
+  // own (O9810 ...): a file on the subroutine path named after the number,
+  // O9810, O9810.nc or 9810.nc (the number with at least 4 digits, or as
+  // written), holding that program.
+  const std::string padded = std::string(label.size() < 4 ? 4 - label.size() : 0, '0') + label;
+  for (const std::string& dir : path_)
+    for (const std::string& name :
+         {"O" + padded, "O" + padded + ".nc", padded + ".nc", "O" + label + ".nc", label + ".nc"}) {
+      const std::filesystem::path f = std::filesystem::path(dir) / name;
+      std::ifstream in(f, std::ios::binary);
+      if (!in) continue;
+      std::ostringstream data;
+      data << in.rdbuf();
+      sources_.push_back(make_source(f.string(), std::move(data).str(), 1));
+      if (const std::optional<Position> q = locate_program(label)) return q;
+      sources_.pop_back();  // not the program it is named after
+    }
+  return std::nullopt;
+}
+
 Flattener::Position Flattener::find_program(const Position& p, const std::string& label,
                                             std::size_t at, const char* what) {
   if (const std::optional<Position> q = locate_program(label)) return *q;
+  if (fanuc_)
+    if (const std::optional<Position> q = load_program_file(label)) return *q;
   fail(p, at,
-       fmt::format("{} P{}: the program has no O{} line; add the {} (O{} ... M99) after the "
+       fmt::format("{} P{}: the program has no O{} line{}; add the {} (O{} ... M99) after the "
                    "main program's M30",
-                   what, label, label, std::string_view(what) == "G65" ? "macro" : "subprogram",
-                   label));
+                   what, label, label,
+                   fanuc_ ? fmt::format(" and no file O{} or O{}.nc is on the subroutine path "
+                                        "(--subroutine-path, default the program's folder)",
+                                        label, label)
+                          : "",
+                   std::string_view(what) == "G65" ? "macro" : "subprogram", label));
 }
 
 bool Flattener::fanuc_call(const Position& p) {

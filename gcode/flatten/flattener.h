@@ -154,6 +154,8 @@ class Flattener {
   Position find_program(const Position& p, const std::string& label, std::size_t at,
                         const char* what);
   std::optional<Position> locate_program(const std::string& label) const;
+  /// Fanuc: program O<label> from its own file on the subroutine path.
+  std::optional<Position> load_program_file(const std::string& label);
 
   // fanuc_macro.cc
   /// Is `raw` a program number line (O1234, :1234)? `label`: its number.

@@ -6,6 +6,8 @@
 // refused because it depends on the control's parameters.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -13,6 +15,7 @@
 #include "core/common/input_error.h"
 #include "gcode/nc_interpreter.h"
 #include "gcode/program_reader.h"
+#include "tests/support/cli_in_source.h"
 #include "tests/support/nc_read.h"
 
 namespace volmap {
@@ -21,10 +24,10 @@ namespace {
 using Reading = test::NcReading;
 
 Reading run(const std::string& program, nc::Dialect dialect = nc::Dialect::kFanuc,
-            nc::ProgramSetup setup = {}) {
+            nc::ProgramSetup setup = {}, std::vector<std::string> path = {}) {
   setup.dialect = dialect;
   std::istringstream in(program);
-  return test::read_nc(in, "f.nc", setup);
+  return test::read_nc(in, "f.nc", setup, std::move(path));
 }
 
 std::string error_of(const std::string& program, nc::Dialect d = nc::Dialect::kFanuc,
@@ -210,6 +213,14 @@ TEST(FanucRules, SubprogramCallsFindTheirProgramNumber) {
   r = run("O0001\nG90 G00 X0. Y0. Z0.\nM98 P10 L2\nM30\n:0010\n" + sub);
   EXPECT_DOUBLE_EQ(r.state.position_mm.x(), 2.0);
   EXPECT_TRUE(has(error_of("O0001\nG65 P9000 X1\nM30\nO9000\nM99\n"), "decimal point"));
+  // A macro stored as a program of its own: O9200.nc on the subroutine
+  // path (its arguments X Y are #24 #25 there).
+  const std::filesystem::path dir = test::fresh_dir("fanuc_macro_file");
+  std::ofstream(dir / "O9200.nc") << "%\nO9200 (MOVE TO X Y)\nG90 G00 X#24 Y#25\nM99\n%\n";
+  r = run("O0001\nG90 G00 X0. Y0. Z0.\nG65 P9200 X4. Y5.\nM30\n", nc::Dialect::kFanuc, {},
+          {dir.string()});
+  EXPECT_EQ(r.state.position_mm, Eigen::Vector3d(4, 5, 0));
+  EXPECT_TRUE(has(error_of("O0001\nG65 P9300 X4.\nM30\n"), "no file O9300"));
   EXPECT_TRUE(has(error_of("O0001\nG66 P9000 X1.\nM30\n"), "modal macro"));
 }
 
