@@ -67,6 +67,8 @@ struct State {
   /// G98 or G99 given: a Fanuc control's return level before either is
   /// its power-on setting, which an offline post cannot know.
   bool return_mode_given = false;
+  /// Fanuc: the shift in g92_mm came from G92 (1) or G52 (2), or none (0).
+  int fanuc_shift = 0;
   int coord_system = 0;  ///< 0 = G54 .. 8 = G59.3
   /// The program's origin, machine mm: the active coordinate system's
   /// offset, plus the G92 offset while it applies.

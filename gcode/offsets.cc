@@ -12,6 +12,10 @@
 //    to the values given (program units, absolute under G91 too); the axes
 //    not named keep the offset in effect (zero while suspended); applied.
 // Tool table rows (G10 L1 L10 L11) are refused: give a tool table.
+// Fanuc (Series 0i-MF operator's manual, B-64604EN): G10 L2 P1-P6 sets G54-
+// G59, and under G91 adds to the offset; P0 (the external offset), L20
+// (the additional systems G54.1 P..), G52 under G91, G92.2/G92.3 and G52
+// and G92 in one program (separate shifts there, one here) are refused.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -35,6 +39,7 @@ void BlockCheck::offsets(int code10) {
                                        "known here; command it first, or give `initial_position`",
                                        "XYZ"[a]));
   };
+  if (fanuc()) fanuc_offsets(code10);
   if (code10 == kG10SetOffsets) {
     const Word* l = word('L');
     const Word* p = word('P');
@@ -52,7 +57,8 @@ void BlockCheck::offsets(int code10) {
       const Word* w = word("XYZ"[a]);
       if (!w) continue;
       if (l->value == 2) {
-        offset[a] = w->value * s_.unit_mm;
+        // (Fanuc under G91: added to the offset.)
+        offset[a] = (fanuc() && !s_.absolute ? offset[a] : 0.0) + w->value * s_.unit_mm;
       } else {
         known_position(a);
         offset[a] =
@@ -84,6 +90,34 @@ void BlockCheck::offsets(int code10) {
     s_.g92_applied = code10 == kG92_3AxisOffsetRestore;
   }
   s_.update_origin();
+}
+
+void BlockCheck::fanuc_offsets(int code10) {
+  const Word* self = g[kNonModal];
+  if (code10 == kG10SetOffsets) {
+    const Word* l = word('L');
+    const Word* p = word('P');
+    if (l && l->value == 20)
+      fail(l,
+           "Fanuc's G10 L20 sets an additional work offset (G54.1 P..), which volmap does "
+           "not read; use G54-G59 (G10 L2 P1-P6)");
+    if (p && l && l->value == 2 && (p->value == 0 || p->value > 6))
+      fail(p,
+           "Fanuc's G10 L2 takes P1 (G54) to P6 (G59); P0 is the external work offset, "
+           "which volmap does not read");
+  }
+  if ((code10 == kG92_2AxisOffsetSuspend || code10 == kG92_3AxisOffsetRestore))
+    fail(self, "G92.2 and G92.3 are LinuxCNC's, not Fanuc's");
+  if (code10 == kG52LocalOffset && !s_.absolute)
+    fail(self,
+         "G52 under G91: whether its values add to the local offset differs between "
+         "controls; give them under G90");
+  const int shift = code10 == kG52LocalOffset ? 2 : code10 == kG92AxisOffset ? 1 : 0;
+  if (shift != 0 && s_.fanuc_shift != 0 && s_.fanuc_shift != shift)
+    fail(self,
+         "G52 and G92 in one program: a Fanuc control keeps them apart (G92 cancels the "
+         "local offset), volmap as one shift; use one of them");
+  if (shift != 0) s_.fanuc_shift = shift;
 }
 
 }  // namespace volmap::nc

@@ -117,6 +117,21 @@ TEST(FanucRules, G28GoesToTheMachineZeroThroughTheNamedAxesOnly) {
   EXPECT_TRUE(has(error_of("G90 G00 X10 Y20 Z30\nG91 G28 Z0\n", nc::Dialect::kLinuxCnc), "G28"));
 }
 
+TEST(FanucRules, G10AddsUnderG91AndWhatDiffersIsRefused) {
+  // G10 L2 P1 X5. then, under G91, X5. again: G54 X is 10 (LinuxCNC: 5).
+  const std::string p = "G90 G10 L2 P1 X5. Y0 Z0\nG91 G10 L2 P1 X5.\nG90 G54 G00 X0 Y0 Z0\n";
+  EXPECT_DOUBLE_EQ(run(p).state.position_mm.x(), 10.0);
+  EXPECT_DOUBLE_EQ(run("G90 G10 L2 P1 X5 Y0 Z0\nG91 G10 L2 P1 X5\nG90 G54 G00 X0 Y0 Z0\n",
+                       nc::Dialect::kLinuxCnc)
+                       .state.position_mm.x(),
+                   5.0);
+  EXPECT_TRUE(has(error_of("G10 L20 P1 X0\n"), "G54.1"));
+  EXPECT_TRUE(has(error_of("G10 L2 P0 X0\n"), "external work offset"));
+  EXPECT_TRUE(has(error_of("G90 G00 X0 Y0 Z0\nG92.2\n"), "LinuxCNC's"));
+  EXPECT_TRUE(has(error_of("G91 G52 X1.\n"), "under G90"));
+  EXPECT_TRUE(has(error_of("G90 G00 X0 Y0 Z0\nG52 X1.\nG92 X0\n"), "G52 and G92"));
+}
+
 TEST(FanucRules, G53PositionsAtRapidTraverse) {
   const Reading r = run("G90 G01 X0. Y0. Z0. F100.\nG53 Z-10.\nX5.\n");
   ASSERT_EQ(r.moves.size(), 3u);

@@ -91,6 +91,45 @@ Canon rs274_read(const std::string& program, const fs::path& dir, const std::str
   return canonical(program, tbl, var);
 }
 
+// Where a program runs, for volmap and for rs274 alike:
+//  - var: G28's and G30's stored positions, the program's origin (rs274's
+//    G54 is zero, its homes are zero);
+//  - rs274_var, for a program with G53 only: rs274 with the same G54
+//    (#5221-#5223) as volmap's --work-offset, so that a G53 move goes to
+//    the same machine point in both (rs274's points stay in program
+//    coordinates). Not for the others: rs274 starts at machine zero, which
+//    --initial-position 0,0,0 matches only while its G54 is zero;
+//  - initial: where rs274 starts (machine zero) in program coordinates.
+struct Placement {
+  std::string var, rs274_var, initial;
+};
+
+Placement placement(const std::string& in, const std::string& out, const Eigen::Vector3d& wo) {
+  Placement pl;
+  pl.var = out + ".var";
+  std::string text = test::file_bytes(in);
+  std::transform(text.begin(), text.end(), text.begin(), ::toupper);
+  const bool g53 = text.find("G53") != std::string::npos;
+  if (g53) pl.rs274_var = out + ".rs274.var";
+  const Eigen::Vector3d start = g53 ? Eigen::Vector3d(-wo) : Eigen::Vector3d::Zero();
+  pl.initial =
+      fmt::format(" --initial-position {:.4f},{:.4f},{:.4f}", start.x(), start.y(), start.z());
+  std::map<int, double> homes;
+  for (int a = 0; a < 6; ++a)
+    for (int first : {5161, 5181}) homes[first + a] = a < 3 ? wo[a] : 0.0;
+  std::ofstream v(pl.var);
+  for (const auto& [n, x] : homes) v << fmt::format("{} {:.6f}\n", n, x);
+  if (g53) {
+    std::map<int, double> with_g54 = homes;  // (rs274 wants the numbers in order)
+    for (int a = 0; a < 3; ++a) with_g54[5221 + a] = wo[a];
+    // rs274 without an INI file reads a parameter file in inches; the rotary
+    // axes' values are zero.
+    std::ofstream r(pl.rs274_var);
+    for (const auto& [n, x] : with_g54) r << fmt::format("{} {:.8f}\n", n, x / 25.4);
+  }
+  return pl;
+}
+
 TEST(RealPrograms, PostedAsRs274RunsThemOrRefusedAtTheLine) {
   require_rs274();
   const fs::path dir = test::fresh_dir("real_programs");
@@ -127,36 +166,10 @@ TEST(RealPrograms, PostedAsRs274RunsThemOrRefusedAtTheLine) {
             .cwiseMax(Eigen::Vector3d::Zero())
             .cwiseMin(Eigen::Vector3d(500, 400, 300));
     const std::string out = (dir / ("post-" + p.file)).string();
-    // G28's and G30's stored positions where rs274 has them: the program's
-    // origin (its G54 is zero, its homes are zero).
-    const std::string var = out + ".var";
-    // For a program with G53: rs274 with the same G54 (#5221-#5223) as
-    // volmap's --work-offset, so that a G53 move goes to the same machine
-    // point in both (rs274's points stay in program coordinates). Not for
-    // the others: rs274 starts at machine zero, which --initial-position
-    // 0,0,0 matches only while its G54 is zero. rs274 wants the numbers in
-    // order.
-    const std::string rs274_var = out + ".rs274.var";
-    std::string text = test::file_bytes(in);
-    std::transform(text.begin(), text.end(), text.begin(), ::toupper);
-    const bool g53 = text.find("G53") != std::string::npos;
-    const std::string g53_var = g53 ? rs274_var : "";
-    // Where rs274 starts, machine zero, in program coordinates.
-    const Eigen::Vector3d start = g53 ? Eigen::Vector3d(-wo) : Eigen::Vector3d::Zero();
-    const std::string initial =
-        fmt::format(" --initial-position {:.4f},{:.4f},{:.4f}", start.x(), start.y(), start.z());
-    {
-      std::map<int, double> homes, with_g54;
-      for (int a = 0; a < 6; ++a)
-        for (int first : {5161, 5181}) homes[first + a] = a < 3 ? wo[a] : 0.0;
-      with_g54 = homes;
-      for (int a = 0; a < 3; ++a) with_g54[5221 + a] = wo[a];
-      std::ofstream v(var), r(rs274_var);
-      for (const auto& [n, x] : homes) v << fmt::format("{} {:.6f}\n", n, x);
-      // (rs274 without an INI file reads a parameter file in inches; the
-      // rotary axes' values are zero.)
-      for (const auto& [n, x] : with_g54) r << fmt::format("{} {:.8f}\n", n, x / 25.4);
-    }
+    const Placement place = placement(in, out, wo);
+    const std::string& var = place.var;
+    const std::string& g53_var = place.rs274_var;
+    const std::string& initial = place.initial;
     const std::string cmd =
         test::volmap_binary() + " post --machine " + machine + " --errors " + errors +
         fmt::format(" --work-offset {:.4f},{:.4f},{:.4f}", wo.x(), wo.y(), wo.z()) + " --clamp" +
