@@ -52,6 +52,7 @@ bool BlockCheck::common_block() {
   constexpr std::uint32_t kAxisLetters = 1u << ('X' - 'A') | 1u << ('Y' - 'A') | 1u << ('Z' - 'A');
   constexpr std::uint32_t kFeedLetter = 1u << ('F' - 'A');
   const std::uint32_t letters = words_.letter_mask;
+  if (fanuc() && !s_.group01_given) return false;  // (the general steps refuse it)
   if (!(words_.g_mask == 0 && words_.m_mask == 0 && !polar &&
         (letters & ~(kAxisLetters | kFeedLetter)) == 0 && (letters & kAxisLetters) != 0 &&
         (s_.motion == kG0Rapid || s_.motion == kG1Linear)))
@@ -121,7 +122,10 @@ void BlockCheck::general_steps() {
   if (g[kMotion]) {
     const int code = g[kMotion]->code10;
     s_.motion = code;
-    if (code == kG0Rapid || code == kG1Linear || is_arc(code)) s_.group01 = code;
+    if (code == kG0Rapid || code == kG1Linear || is_arc(code)) {
+      s_.group01 = code;
+      s_.group01_given = true;
+    }
     // Fanuc: G80 ends the cycle, the group 01 motion goes on.
     if (code == kG80CycleCancel && fanuc()) s_.motion = s_.group01;
     effect_.motion_code = code;
@@ -255,6 +259,13 @@ bool BlockCheck::motion_in_block(bool any_axis) {
       setup_.tool_axis_words && !is_arc(arc_mode) && (word('I') || word('J') || word('K'));
   const bool motion_here = (any_axis && !consumed_axes_) || full_circle || tool_axis_only ||
                            (g[kMotion] && is_cycle(g[kMotion]->code10));
+  if (fanuc() && motion_here && !g[kMotion] && !s_.group01_given && !is_cycle(s_.motion) && !g53_)
+    fail(any_axis ? (word('X')   ? word('X')
+                     : word('Y') ? word('Y')
+                                 : word('Z'))
+                  : nullptr,
+         "axis words before any G00, G01, G02 or G03: a Fanuc control starts in G00 or G01 as "
+         "its parameter 3402#0 says, which the program does not; give the motion code");
   if (motion_here && g[kMotion] && g[kMotion]->code10 == kG80CycleCancel)
     fail(g[kMotion], "axis words with G80; remove them or use G0/G1");
   if (g53_ && motion_here && s_.motion != kG0Rapid && s_.motion != kG1Linear)

@@ -8,10 +8,10 @@ namespace {
 bool blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
 bool digit(char c) { return c >= '0' && c <= '9'; }
 
-// Only spaces and ( ) comments from i on.
+// Only spaces, ( ) comments and ';' (a Fanuc block's end) from i on.
 bool only_comments(std::string_view t, std::size_t i) {
   while (i < t.size()) {
-    if (blank(t[i])) {
+    if (blank(t[i]) || t[i] == ';') {
       ++i;
     } else if (t[i] == '(') {
       const std::size_t close = t.find(')', i);

@@ -47,11 +47,27 @@ void BlockCheck::fanuc_words() {
     }
   }
   const bool dwell = (words_.g_mask & (1u << kNonModal)) != 0 && g[kNonModal]->code10 == kG4Dwell;
+  // H is modal on a Fanuc control: G43 without H keeps the last one, an H
+  // alone under G43 switches to it. Both refused: give G43 with its H.
+  const bool g43 =
+      (words_.g_mask & (1u << kToolLength)) != 0 && g[kToolLength]->code10 == kG43ToolLength;
+  if (g43 && !words_.given_word('H'))
+    fail(g[kToolLength],
+         "G43 without H: a Fanuc control applies the H number in effect (the "
+         "last one given), which volmap does not follow; give G43 H<n>");
+  if (const Word* h = words_.given_word('H'); h && !g43)
+    fail(h,
+         "H without G43: on a Fanuc control it selects another tool length offset while G43 "
+         "is in effect; give G43 H<n>");
   const bool motion_word = (words_.g_mask & (1u << kMotion)) != 0;
   const bool cycle = is_cycle(motion_word ? g[kMotion]->code10 : s_.motion);
   for (const Word& w : b_.words) {
     if (!std::strchr("XYZABCIJKRQ", w.letter) || w.value == 0.0) continue;
-    if (dwell && w.letter == 'X') continue;   // seconds
+    if (dwell && w.letter == 'X' && written_with_point(b_, w)) continue;  // seconds
+    if (dwell && w.letter == 'X')
+      fail(&w,
+           "G04 X without a decimal point counts least input increments (X2 = 0.002 s) "
+           "unless parameter 3401#0 is set; write the seconds with a point, or P in ms");
     if (cycle && w.letter == 'K') continue;   // repeats
     if (written_with_point(b_, w)) continue;  // (the flattener writes its values so)
     fail(&w,

@@ -64,11 +64,15 @@ struct State {
   /// of their own (09), and G80 brings this motion back (LinuxCNC: G80 is a
   /// motion mode that moves nothing).
   int group01 = kG0Rapid;
+  bool group01_given = false;  ///< a G0-G3 seen (Fanuc's power-on one is a parameter, 3402#0)
   /// G98 or G99 given: a Fanuc control's return level before either is
   /// its power-on setting, which an offline post cannot know.
   bool return_mode_given = false;
   /// Fanuc: the shift in g92_mm came from G92 (1) or G52 (2), or none (0).
   int fanuc_shift = 0;
+  /// Fanuc: bit 3 n + a: axis a of system n set by G90 G10 L2 (G91 G10 L2
+  /// adds to it then).
+  unsigned fanuc_offsets_set = 0;
   int coord_system = 0;  ///< 0 = G54 .. 8 = G59.3
   /// The program's origin, machine mm: the active coordinate system's
   /// offset, plus the G92 offset while it applies.

@@ -57,7 +57,14 @@ void BlockCheck::offsets(int code10) {
       const Word* w = word("XYZ"[a]);
       if (!w) continue;
       if (l->value == 2) {
-        // (Fanuc under G91: added to the offset.)
+        // (Fanuc under G91: added to the offset, which must be known.)
+        const unsigned bit = 1u << (3 * n + a);
+        if (fanuc() && !s_.absolute && !(s_.fanuc_offsets_set & bit) &&
+            !setup_.parameters.contains(5221 + 20 * n + a))
+          fail(w,
+               "G10 L2 under G91 adds to an offset the program has not set (it is the "
+               "control's): set it under G90 first, or give it in a parameter file");
+        s_.fanuc_offsets_set |= bit;
         offset[a] = (fanuc() && !s_.absolute ? offset[a] : 0.0) + w->value * s_.unit_mm;
       } else {
         known_position(a);

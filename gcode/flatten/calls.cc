@@ -188,8 +188,10 @@ bool Flattener::fanuc_call(const Position& p) {
     // O0010 three times); Haas and 8-digit program numbers: P is the
     // number. Whichever program the file has decides; both: refused.
     const std::string short_label = std::to_string(static_cast<long>(pw->value) % 10000);
-    const bool whole = locate_program(label).has_value();
-    const bool split = locate_program(short_label).has_value();
+    // (Programs stored on their own count too: load_program_file.)
+    const bool whole = locate_program(label).has_value() || load_program_file(label).has_value();
+    const bool split =
+        locate_program(short_label).has_value() || load_program_file(short_label).has_value();
     if (whole && split)
       fail(p, pw->begin,
            fmt::format("M98 P{}: the file has O{} and O{}, and which one runs "
@@ -235,8 +237,18 @@ bool Flattener::fanuc_g65(const Position& p) {
   const std::string& t = norm_.text;
   FanucLocals args{};
   const Token *pw = nullptr, *lw = nullptr;
+  int last_ijk = 0;
   for (const Token& tok : tokens_) {
     if (tok.letter == 0 || &tok == g65 || tok.letter == 'n') continue;
+    if (&tok < g65)
+      fail(p, tok.begin, "a word before G65: the manual puts G65 before its arguments; move it");
+    if (const int ijk = tok.letter == 'i' ? 1 : tok.letter == 'j' ? 2 : tok.letter == 'k' ? 3 : 0) {
+      if (ijk < last_ijk)
+        fail(p, tok.begin,
+             "I J K out of order: a control may read them as argument "
+             "specification II (a new set); write them in the order I J K");
+      last_ijk = ijk;
+    }
     if (tok.letter == 'p') {
       pw = &tok;
       continue;

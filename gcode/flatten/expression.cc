@@ -395,7 +395,8 @@ double ValueReader::operations(std::size_t& i, std::size_t open, bool to_end) co
     Op op = Op::kClose;
     // (A statement's value ends at the line's end or a comment; another
     // statement or a word after it is the caller's to refuse.)
-    if (!to_end || (at(i) != '\0' && at(i) != '(' && at(i) != '#' && !word_after(i))) {
+    if (!to_end ||
+        (at(i) != '\0' && at(i) != '(' && at(i) != ';' && at(i) != '#' && !word_after(i))) {
       op = read_operator(i, open);
       if (to_end && op == Op::kClose) fail(where, "a ']' without its '['");
     }

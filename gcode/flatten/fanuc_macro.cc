@@ -181,6 +181,27 @@ void Flattener::push_fanuc_loop(const Position& p, int m, bool do_only) {
   frames_.push_back(f);
 }
 
+void Flattener::append_fanuc_value(const Position& p, char letter, std::size_t at, double value,
+                                   std::string& out) const {
+  // Distances, angles and the feed take a point; the other addresses (G M
+  // T H D S P L N ...) a whole number, which a point would make an alarm.
+  if (std::strchr("xyzabcijkrquvwf", letter)) {
+    append_fanuc_number(out, value);
+    return;
+  }
+  const double whole = std::round(value);
+  const double tenths = std::round(value * 10);
+  if ((letter == 'g' || letter == 'm') && std::abs(value * 10 - tenths) < 1e-9 && whole != value) {
+    out += fmt::format("{:.1f}", value);  // G05.1, G54.1 ...
+    return;
+  }
+  if (std::abs(value - whole) > 1e-9 || std::abs(whole) > 1e9)
+    fail(p, at,
+         fmt::format("{} takes a whole number on a Fanuc control, and the value here is {}",
+                     static_cast<char>(letter - 'a' + 'A'), value));
+  out += fmt::format("{}", static_cast<long long>(whole));
+}
+
 void Flattener::only_comment_from(const Position& p, std::size_t i) const {
   const std::string& t = norm_.text;
   if (i < t.size() && t[i] == ';')
@@ -235,7 +256,8 @@ void Flattener::fanuc_assignment(const Position& p, const ValueReader& r, std::s
   // is refused by the reader or is arithmetic (vacant as 0).
   std::size_t k = i + 1;
   while (k < t.size() && digit(t[k])) ++k;
-  const bool copy = i < t.size() && t[i] == '#' && k > i + 1 && (k == t.size() || t[k] == '(');
+  const bool copy =
+      i < t.size() && t[i] == '#' && k > i + 1 && (k == t.size() || t[k] == '(' || t[k] == ';');
   const std::size_t value_at = i;
   const double v = r.statement_value(i);
   if (is_vacant(v) && !copy)
@@ -388,7 +410,7 @@ bool Flattener::fanuc_evaluate(const Position& p) {
     if (!line_.empty() || gap == 0) line_.append(text.substr(gap, from - gap));
     if (tok.evaluated) {
       line_ += text[from];
-      append_fanuc_number(line_, tok.value);
+      append_fanuc_value(p, tok.letter, tok.begin, tok.value, line_);
     } else {
       line_.append(text.substr(from, col[tok.end - 1] + 1 - from));
     }

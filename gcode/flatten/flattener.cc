@@ -160,6 +160,10 @@ bool Flattener::next(FlatLine& out, bool ended) {
       if (pc_.source == 0 && frames_.empty()) return false;
       // (A subroutine file's lines run only inside its sub, which ends it.)
       const Frame& f = frames_.back();
+      if (f.kind == Frame::kFanucLoop)
+        fail(f.start, static_cast<std::size_t>(-1),
+             fmt::format("DO{} without END{}: the file ends inside the loop; add END{}", f.label,
+                         f.label, f.label));
       static constexpr const char* kEnd[] = {"endsub", "endwhile", "while", "endrepeat",
                                              "endif",  "M99",      "END",   "M99"};
       fail(f.start, static_cast<std::size_t>(-1),

@@ -174,6 +174,9 @@ class Flattener {
   Position fanuc_find_end(const Position& from, int m) const;
   Position fanuc_goto(const Position& p, long n, std::size_t at);
   bool fanuc_evaluate(const Position& p);
+  /// An evaluated address's value as a Fanuc control reads it.
+  void append_fanuc_value(const Position& p, char letter, std::size_t at, double value,
+                          std::string& out) const;
   bool fanuc_g65(const Position& p);
 
   Parameters& params_;

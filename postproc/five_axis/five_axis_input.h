@@ -121,6 +121,10 @@ class FiveAxisReader {
   /// Whether the last line read ended with a newline (kept on output); an
   /// APT statement's lines but its last always do.
   bool newline() const { return newline_ || !pending_.empty(); }
+  /// The program opens with a Fanuc program number (nc::detect_dialect):
+  /// axis words without a decimal point are refused (least input
+  /// increments on the control), and the post writes every number with one.
+  bool fanuc_head() const { return fanuc_head_; }
   const std::string& line_ending() const { return line_ending_; }
   /// The file began with a UTF-8 byte-order mark (taken off, written back
   /// by the post).
@@ -167,6 +171,7 @@ class FiveAxisReader {
   /// The program switches TCP on (M428, G43.4, G43.5, G234, M128, TRAORI):
   /// its moves outside the switched-on part are not tool-tip moves.
   bool tcp_program_ = false, tcp_on_ = false;
+  bool fanuc_head_ = false;
   bool tcp_by_g_code_ = false;  ///< switched on by G43.4/G43.5/G234: G49 ends it
   bool moved_ = false;
 

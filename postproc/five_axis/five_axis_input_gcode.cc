@@ -6,9 +6,11 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <regex>
 
 #include "core/common/units.h"
+#include "gcode/dialect.h"
 #include "gcode/g_codes.h"
 #include "gcode/nc_writer.h"
 #include "postproc/five_axis/apt_reader.h"
@@ -68,6 +70,10 @@ void FiveAxisReader::scan_tape() {
     }
     if (raw.find_first_not_of(" \t\r\n") != std::string::npos) text_before = true;
   }
+  std::string head;  // (after the leader)
+  for (std::size_t k = static_cast<std::size_t>(leader_lines_); k < buffered_.size(); ++k)
+    head += buffered_[k];
+  fanuc_head_ = nc::detect_dialect(head, leader_lines_ + 1).dialect == nc::Dialect::kFanuc;
   static const std::regex kTcpOn(
       R"((^|[^A-Z0-9.])(M0*428|G0*43\.[45]|G0*234|M0*128|TRAORI)(?![0-9.]))");
   for (const std::string& raw : buffered_)
@@ -136,6 +142,15 @@ void FiveAxisReader::gcode_line(const std::string& raw, FiveAxisLine& out) {
   const nc::Block& b = out.block;
   if (b.block_delete)
     fail(1, "block delete '/' is not supported by the five-axis post; remove the '/' or the block");
+  if (fanuc_head_)
+    for (const nc::Word& w : b.words)
+      if (std::strchr("XYZABCIJKR", w.letter) && w.value != 0.0 &&
+          b.text.find('.', w.begin) >= w.end)
+        fail(static_cast<int>(w.begin) + 1,
+             std::string(1, w.letter) +
+                 " has no decimal point, in a program that opens with a Fanuc program number: "
+                 "the control reads it in least input increments unless parameter 3401#0 is "
+                 "set; write the number with its point");
   GcodeWords words;
   read_gcode_words(b, out, words);
   if (words.g93 && words.g94) fail(1, "G93 and G94 in one block");

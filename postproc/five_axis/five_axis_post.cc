@@ -68,6 +68,7 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
   for (int k = 0; k < mach.axis_count(); ++k) {
     const AxisName n = mach.axis_order[static_cast<size_t>(k)];
     word(axis_char(n));
+    const std::size_t at = s.size();
     if (is_rotary(n)) {
       append_number(s, c[k] * units::kDegPerRad, o_.angle_decimals);
       rot2 += std::pow((c[k] - from[k]) * units::kDegPerRad, 2);
@@ -75,6 +76,7 @@ std::string FiveAxisPost::move_text(const AxisVector& c, double unit_mm, bool lo
       append_number(s, c[k] / unit_mm, dec);
       xyz2 += std::pow((c[k] - from[k]) / unit_mm, 2);
     }
+    if (fanuc_points_ && s.find('.', at) == std::string::npos) s += '.';
   }
   if (feed) {
     double f;
@@ -272,6 +274,7 @@ void FiveAxisPost::run(FiveAxisReader& reader) {
     line_ = l.line;
     line_ending_ = reader.line_ending();
     reader_newline_ = reader.newline();
+    fanuc_points_ = reader.fanuc_head();
     ++report_.lines;
     try {
       if (l.tool >= 0) change_tool(l);

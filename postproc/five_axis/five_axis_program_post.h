@@ -148,6 +148,7 @@ class FiveAxisPost {
   int line_ = 0;
   std::string line_ending_ = "\n";
   bool reader_newline_ = true;
+  bool fanuc_points_ = false;  ///< every number written with its point (FiveAxisReader::fanuc_head)
   bool started_ = false;
   AxisVector u_nom_;  ///< nominal axes at the end of the last move
   /// Whole turns added to the programmed angles of each unlimited rotary

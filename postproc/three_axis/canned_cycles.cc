@@ -101,7 +101,9 @@ void ProgramPost::cycle_holes(std::string_view text, const nc::Block& b, const n
       nc::BlockEdit edit;
       for (size_t i = 0; i < b.words.size(); ++i) {
         const char L = b.words[i].letter;
-        if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == '@' || L == '^')
+        // (K: Fanuc's repeats, as L; the interpreter refuses K in a LinuxCNC cycle.)
+        if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == 'K' || L == '@' ||
+            L == '^')
           edit.remove.push_back(static_cast<int>(i));
       }
       edit.insert = words;
@@ -125,8 +127,8 @@ void ProgramPost::write_expanded_cycle_block(const nc::Block& b, int code) {
   for (size_t i = 0; i < b.words.size(); ++i) {
     const nc::Word& w = b.words[i];
     const char L = w.letter;
-    if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == 'P' || L == 'Q' ||
-        L == '@' || L == '^' || (L == 'G' && w.code10 == code))
+    if (L == 'X' || L == 'Y' || L == 'Z' || L == 'R' || L == 'L' || L == 'K' || L == 'P' ||
+        L == 'Q' || L == '@' || L == '^' || (L == 'G' && w.code10 == code))
       edit.remove.push_back(static_cast<int>(i));
   }
   const std::string rest = nc::apply_edit(b, edit);

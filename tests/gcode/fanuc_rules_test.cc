@@ -65,10 +65,11 @@ TEST(FanucRules, ASemicolonEndsTheBlock) {
 }
 
 TEST(FanucRules, G04TakesItsTimeFromXOrP) {
-  const Reading r = run("G90 G00 X1. Y2. Z3.\nG04 X1.5\nG04 P500\nG04 X2\n");
+  const Reading r = run("G90 G00 X1. Y2. Z3.\nG04 X1.5\nG04 P500\nG04 X2.\n");
   ASSERT_EQ(r.moves.size(), 1u);
   EXPECT_EQ(r.state.position_mm, Eigen::Vector3d(1, 2, 3));
   EXPECT_TRUE(has(error_of("G04 X1. P5\n"), "both X and P"));
+  EXPECT_TRUE(has(error_of("G04 X2\n"), "0.002 s"));
   EXPECT_TRUE(has(error_of("G04\n"), "X (seconds) or P (milliseconds)"));
 }
 
@@ -239,6 +240,29 @@ TEST(FanucRules, SubprogramCallsFindTheirProgramNumber) {
   EXPECT_TRUE(has(error_of("O0001\nG66 P9000 X1.\nM30\n"), "modal macro"));
 }
 
+// From the review of session 22: H is modal, the power-on motion mode is a
+// parameter, G10 under G91 adds to the control's offset, G65's words.
+TEST(FanucRules, WhatTheControlKeepsModalIsGivenOrRefused) {
+  nc::ProgramSetup s;
+  s.tool_length_mm[1] = 10.0;
+  EXPECT_TRUE(
+      has(error_of("G90 G00 X0 Y0 Z50.\nG43 Z50.\n", nc::Dialect::kFanuc, s), "G43 without H"));
+  EXPECT_TRUE(has(error_of("G90 G00 X0 Y0 Z50.\nG43 H1 Z50.\nH2\n", nc::Dialect::kFanuc, s),
+                  "H without G43"));
+  EXPECT_TRUE(has(error_of("G90 G17\nX0 Y0 Z5. F100.\n"), "parameter 3402#0"));
+  EXPECT_TRUE(has(error_of("G91 G10 L2 P2 X10.\n"), "has not set"));
+  EXPECT_DOUBLE_EQ(run("G90 G10 L2 P2 X1. Y0 Z0\nG91 G10 L2 P2 X10.\nG90 G55 G00 X0 Y0 Z0\n")
+                       .state.position_mm.x(),
+                   11.0);
+  EXPECT_TRUE(has(error_of("O0001\nX1. G65 P9000\nM30\nO9000\nM99\n"), "before G65"));
+  EXPECT_TRUE(has(error_of("O0001\nG65 P9000 K1. J2.\nM30\nO9000\nM99\n"), "I J K"));
+  // An evaluated M, T or H is a whole number without a point.
+  EXPECT_EQ(run("O0001\n#1 = 3\nM#1\n").out, "O0001\nM3\n");
+  EXPECT_TRUE(has(error_of("O0001\n#1 = 3.5\nT#1\n"), "whole number"));
+  // ';' after a statement ends it.
+  EXPECT_EQ(run("O0001\n#1 = 5.;\nG90 G00 X#1 Y0 Z0;\n").state.position_mm.x(), 5.0);
+}
+
 TEST(FanucRules, AutoReadsAProgramNumberAtTheHeadAsFanuc) {
   EXPECT_EQ(run("%\n:0097\nG90 G00 X0 Y0 Z0\n", nc::Dialect::kAuto).report.dialect.dialect,
             nc::Dialect::kFanuc);
@@ -251,6 +275,7 @@ TEST(FanucRules, AutoReadsAProgramNumberAtTheHeadAsFanuc) {
             nc::Dialect::kLinuxCnc);
   // ';' lines: comments for LinuxCNC, empty blocks for Fanuc; not a block.
   EXPECT_EQ(nc::detect_dialect("; TITLE\nO1000\n", 1).dialect, nc::Dialect::kFanuc);
+  EXPECT_EQ(nc::detect_dialect("O1000 ;\nG00 X10 Y10 Z5\n", 1).dialect, nc::Dialect::kFanuc);
   const nc::DialectChoice c = nc::detect_dialect("(HEAD)\n\nO0123 (X)\n", 1);
   EXPECT_EQ(c.line, 3);
   EXPECT_EQ(c.reason, "program number O0123 at line 3");

@@ -125,6 +125,27 @@ TEST(FanucDialect, ANumberThePostWritesKeepsItsDecimalPoint) {
             "O0001\nG21 G90\nG00 X10 Y20. Z30.\nG01 X20 F100.\nM30\n");
 }
 
+// K repeats come out as one block per hole, like L: a K left in the first
+// block would drill its repeats again (the review of session 22 found it).
+TEST(FanucDialect, KRepeatsAreWrittenOutAsLRepeatsAre) {
+  nc::ProgramSetup s;
+  s.work_offset_mm[0] = Eigen::Vector3d(100, 100, 100);
+  std::istringstream in(
+      "O1000\nG90 G17 G21 G99\nG00 X0. Y0. Z5.\nG91 G81 X10. Y0. Z-3. R-2. K3 F100.\nG80\nM30\n");
+  std::ostringstream out;
+  post::post_program(in, "k.nc", out, test::sample_machine("hsu-3axis"),
+                     test::sample_errors("hsu-3axis"), s, {});
+  const std::string posted = out.str();
+  EXPECT_EQ(posted.find('K'), std::string::npos) << posted;
+  std::istringstream again(posted);
+  const test::NcReading r = test::read_nc(again, "posted.nc", s);
+  int holes = 0;
+  for (const nc::BlockEffect& fx : r.moves)
+    holes +=
+        fx.motion.kind == nc::MotionKind::kCycle ? 1 + static_cast<int>(fx.more_holes.size()) : 0;
+  EXPECT_EQ(holes, 3) << posted;
+}
+
 TEST(FanucDialect, TheChoiceIsSaidOnStderrAndCanBeGiven) {
   const std::string machine = test::source_path("samples/machines/hsu-3axis.json");
   const std::string errors = test::source_path("samples/errors/hsu-3axis.csv");

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -100,7 +101,7 @@ TEST(FiveAxisDialects, TiltedPlanesAndDynamicWorkOffsetsAreRefused) {
 TEST(FiveAxisDialects, TapeFramePassesAsItIs) {
   const std::string program =
       "\xEF\xBB\xBFInformation listing created by NX\nPost: haas umc\n%\nO0001 (PART)\n"
-      "G21 G90\nG43.4 H1\nG0 X10 Y0 Z30 A0 C0\nG49\nM30\n%\ntext after the tape\n";
+      "G21 G90\nG43.4 H1\nG0 X10. Y0 Z30. A0 C0\nG49\nM30\n%\ntext after the tape\n";
   const std::string text = post_text(program);
   EXPECT_EQ(text.rfind("\xEF\xBB\xBFInformation listing created by NX\nPost: haas umc\n%\n"
                        "O0001 (PART)\nG21 G90\n",
@@ -108,6 +109,18 @@ TEST(FiveAxisDialects, TapeFramePassesAsItIs) {
             0u)
       << text;
   EXPECT_NE(text.find("M30\n%\ntext after the tape\n"), std::string::npos) << text;
+  // It opens with a Fanuc program number: every number written has its
+  // point, and one read without it (least input increments there) is refused.
+  const std::size_t move = text.find("\nG0 X");
+  ASSERT_NE(move, std::string::npos) << text;
+  const std::string line = text.substr(move + 1, text.find('\n', move + 1) - move - 1);
+  for (std::size_t k = 0; k < line.size(); ++k)
+    if (std::strchr("XYZAC", line[k])) {
+      EXPECT_NE(line.find('.', k), std::string::npos) << line;
+    }
+  std::string integer = program;
+  integer.replace(integer.find("X10."), 4, "X10");
+  EXPECT_NE(refusal(integer).find("X has no decimal point"), std::string::npos) << refusal(integer);
 }
 
 // The sample tool-vector cone on the A-B dual-rotary table (A about -X
