@@ -33,6 +33,12 @@ struct DialectChoice {
 /// of `head` is not looked at); `first_line`: the number of its first line.
 DialectChoice detect_dialect(std::string_view head, int first_line);
 
+/// Why a Fanuc block with text after ';' is refused (the interpreter's and
+/// the macro flattener's word).
+inline constexpr const char* kFanucTextAfterEndOfBlock =
+    "';' with text after it: a Fanuc control reads ';' as the end of a block (EOB), not as a "
+    "comment; put comments in ( ), or give --dialect linuxcnc for a LinuxCNC program";
+
 /// Is `t` (one line) a Fanuc program number line: [N..] `O<digits>` or
 /// `:<digits>`, then nothing but a comment? `digits` gets the number's text.
 bool is_program_number_line(std::string_view t, std::string_view* digits = nullptr);

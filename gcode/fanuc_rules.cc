@@ -40,10 +40,7 @@ void BlockCheck::fanuc_words() {
     } else if (c == ';' && b_.text.find_first_not_of(" \t\r;", k) != std::string::npos) {
       Word at;  // (a place for the message's column)
       at.begin = static_cast<std::uint32_t>(k);
-      refuse_block(file_, b_, &at,
-                   "';' with text after it: a Fanuc control reads ';' as the end of a block "
-                   "(EOB), not as a comment; put comments in ( ), or give --dialect linuxcnc "
-                   "for a LinuxCNC program");
+      refuse_block(file_, b_, &at, kFanucTextAfterEndOfBlock);
     }
   }
   const bool dwell = (words_.g_mask & (1u << kNonModal)) != 0 && g[kNonModal]->code10 == kG4Dwell;

@@ -196,20 +196,21 @@ void ProgramReader::find_leader() {
 
 void ProgramReader::choose_dialect() {
   const Dialect given = interp_.setup().dialect;
+  // The head as find_leader() left it (the leader, not run, skipped).
+  std::string_view head(buf_.data() + begin_, end_ - begin_);
+  for (int k = 0; k < leader_left_; ++k) {
+    const std::size_t e = head.find('\n');
+    head.remove_prefix(e == std::string_view::npos ? head.size() : e + 1);
+  }
   if (given == Dialect::kAuto) {
-    // The head as find_leader() left it (the leader, not run, skipped).
-    std::string_view head(buf_.data() + begin_, end_ - begin_);
-    for (int k = 0; k < leader_left_; ++k) {
-      const std::size_t e = head.find('\n');
-      head.remove_prefix(e == std::string_view::npos ? head.size() : e + 1);
-    }
     std::string tail;  // a last line without '\n' at the end of the file is looked at too
+    std::string_view lines = head;
     if (eof_ && !head.empty() && head.back() != '\n') {
       tail.assign(head);
       tail += '\n';
-      head = tail;
+      lines = tail;
     }
-    report_.dialect = detect_dialect(head, leader_left_ + 1);
+    report_.dialect = detect_dialect(lines, leader_left_ + 1);
   } else {
     report_.dialect.dialect = given;
   }
@@ -218,7 +219,6 @@ void ProgramReader::choose_dialect() {
   if (!fanuc_) return;
   // A macro statement in the head (the first 64 KiB, where a macro
   // program's text usually is whole): flattened from the first block on.
-  std::string_view head(buf_.data() + begin_, end_ - begin_);
   while (!head.empty() && !flatten_from_start_) {
     const std::size_t e = head.find('\n');
     flatten_from_start_ = fanuc_needs_flattening(head.substr(0, e));

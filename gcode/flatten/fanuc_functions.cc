@@ -28,27 +28,25 @@ double ValueReader::fanuc_function(std::string_view fn, std::size_t begin, std::
   const std::size_t arg_at = i;
   const double x = expression(i);
   if (std::isnan(x)) fail(arg_at, fmt::format("{} of a vacant variable (never set)", fn));
+  // An angle below zero is given as it is or plus 360 by parameter 6004#0.
+  auto above_zero = [&](double a) {
+    if (a < 0.0)
+      fail(begin, fmt::format("{} gives {:g} or {:g} degrees here, as parameter 6004#0 (NAT) of "
+                              "the control says; add 360 or not in the program",
+                              fn == "atan" ? "ATAN" : "ASIN", a, a + 360.0));
+    return a;
+  };
   if (fn == "atan") {
     if (at(i) != '/' || at(i + 1) != '[') fail(i, "ATAN takes two arguments here: ATAN[y]/[x]");
     ++i;
     const std::size_t x_at = i;
     const double x2 = expression(i);
     if (std::isnan(x2)) fail(x_at, "ATAN of a vacant variable (never set)");
-    const double a = std::atan2(x, x2) * kDegPerRad;
-    if (a < 0.0)
-      fail(begin, fmt::format("ATAN gives {:g} or {:g} degrees here, as parameter 6004#0 (NAT) of "
-                              "the control says; add 360 or not in the program",
-                              a, a + 360.0));
-    return a;
+    return above_zero(std::atan2(x, x2) * kDegPerRad);
   }
   if (fn == "asin") {
     if (x < -1.0 || x > 1.0) fail(begin, fmt::format("argument to ASIN out of range: {}", x));
-    const double a = std::asin(x) * kDegPerRad;
-    if (a < 0.0)
-      fail(begin, fmt::format("ASIN gives {:g} or {:g} degrees here, as parameter 6004#0 (NAT) of "
-                              "the control says",
-                              a, a + 360.0));
-    return a;
+    return above_zero(std::asin(x) * kDegPerRad);
   }
   if (fn == "acos") {
     if (x < -1.0 || x > 1.0) fail(begin, fmt::format("argument to ACOS out of range: {}", x));

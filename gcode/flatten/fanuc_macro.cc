@@ -216,10 +216,7 @@ void Flattener::fanuc_end_of_block(const Position& p, std::size_t i) const {
   // ';' is a Fanuc block's end (EOB), not a comment: text after it would
   // be another block on the control.
   if (norm_.text.find_first_not_of(';', i) != std::string::npos)
-    fail(p, i,
-         "';' with text after it: a Fanuc control reads ';' as the end of a block (EOB), not "
-         "as a comment; put comments in ( ), or give --dialect linuxcnc for a LinuxCNC "
-         "program");
+    fail(p, i, kFanucTextAfterEndOfBlock);
 }
 
 bool Flattener::fanuc_condition(const ValueReader& r, std::size_t& i) const {
