@@ -26,8 +26,8 @@ BlockCheck::BlockCheck(const ProgramSetup& setup, const std::string& file, const
 void BlockCheck::run() {
   check_polar_words();
   if (fanuc()) fanuc_words();
-  if (common_block()) return;
-  general_steps();
+  if (!common_block()) general_steps();
+  if (effect_.has_motion) comp_role();
 }
 
 void BlockCheck::check_polar_words() const {
@@ -92,8 +92,12 @@ void BlockCheck::general_steps() {
 
   // Step 3 and 4: execute in RS274NGC order.
   feed_tool_and_spindle();
+  // What runs before cutter compensation's step in LinuxCNC's order (M
+  // codes, the plane) meets it as it was: `G40 M6` and `G40 G18` are refused.
+  if (s_.comp_side != 0) refuse_while_compensating(true);
   if (g[kPlane]) s_.plane = (g[kPlane]->code10 - kG17PlaneXY) / 10;
   if (g[kUnits]) s_.unit_mm = g[kUnits]->code10 == kG20Inch ? 25.4 : 1.0;
+  if (g[kCutterComp] || s_.comp_side != 0 || word('D')) cutter_comp();
   if (g[kToolLength]) tool_length();
   distance_and_coordinate_modes();
   // Non-modal codes that set state (and use the axis words) before the motion.
@@ -164,8 +168,9 @@ void BlockCheck::feed_tool_and_spindle() {
   if (m[kMTool] && m[kMTool]->code10 == kM6ToolChange) {
     s_.tool = s_.selected_tool;
     s_.tool_from_m61 = false;
+    s_.tool_loaded = true;
   }
-  if (m[kMTool] && m[kMTool]->code10 == kM61SetToolNumber) s_.tool_from_m61 = true;
+  if (m[kMTool] && m[kMTool]->code10 == kM61SetToolNumber) s_.tool_from_m61 = s_.tool_loaded = true;
   if (m[kMSpindle]) {
     s_.spindle_turning = m[kMSpindle]->code10 == kM3SpindleClockwise ||
                          m[kMSpindle]->code10 == kM4SpindleCounterClockwise;

@@ -65,6 +65,18 @@ class BlockCheck {
   /// A tool-vector program's new tool axis (I J K of a straight move).
   void straight_tool_axis();
 
+  // cutter_comp.cc
+  /// G40 G41 G42 G41.1 G42.1 and D: the side and radius into the state.
+  void cutter_comp();
+  /// The diameter (mm) a G41/G42's D names, or the spindle's tool's.
+  double comp_diameter_mm(const Word* code, const Word* d) const;
+  /// G41 G42 G41.1 G42.1: the side, the radius, the entry to come.
+  void turn_compensation_on(const Word* code, const Word* d, bool on_before);
+  /// Refuses what may not happen while cutter compensation is on: what
+  /// runs before its step in LinuxCNC's order (before_step), or after.
+  void refuse_while_compensating(bool before_step) const;
+  /// The motion's part in cutter compensation (effect_.comp_role).
+  void comp_role();
   // fanuc_rules.cc
   /// The Fanuc dialect's checks of the words (decimal points, G04's X).
   void fanuc_words();

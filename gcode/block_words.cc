@@ -11,11 +11,11 @@ namespace {
 // Letters whose words need nothing but "not twice in a block": all of A-Z
 // except G and M (modal groups), N (may repeat), the axes the three-axis
 // post refuses (A B C U V W: rotary words only where the machine has the
-// axis) and D E (refused); '@' '^' are handled apart.
+// axis) and E (refused); '@' '^' are handled apart.
 constexpr std::array<bool, 256> kPlainLetter = [] {
   std::array<bool, 256> t{};
   for (char c = 'A'; c <= 'Z'; ++c) t[static_cast<unsigned char>(c)] = true;
-  for (char c : {'G', 'M', 'N', 'A', 'B', 'C', 'U', 'V', 'W', 'D', 'E'})
+  for (char c : {'G', 'M', 'N', 'A', 'B', 'C', 'U', 'V', 'W', 'E'})
     t[static_cast<unsigned char>(c)] = false;
   return t;
 }();
@@ -80,9 +80,7 @@ void collect_other_word(const Block& b, const std::string& file, const std::stri
                              L));
   if ((rotary && rotary_axes.find(L) == std::string::npos) || L == 'U' || L == 'V' || L == 'W')
     refuse_block(file, b, &w, fmt::format("the machine has no axis {}", L));
-  if (L == 'D' || L == 'E')
-    refuse_block(file, b, &w,
-                 fmt::format("word {} is not supported (cutter compensation, lathe)", L));
+  if (L == 'E') refuse_block(file, b, &w, "word E is not supported (a lathe's)");
   if (L != 'N' && (out.letter_mask & (1u << (L - 'A'))))
     refuse_block(file, b, &w, fmt::format("word {} appears twice in one block", L));
   out.letter[static_cast<size_t>(L - 'A')] = &w;

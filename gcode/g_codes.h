@@ -127,6 +127,7 @@ inline constexpr int kM53FeedStop = 530;
 /// M61 .. M68 (tool number, digital and analog I/O) and M70 .. M73 (modal
 /// state save and restore): LinuxCNC's, passed through.
 inline constexpr int kM61SetToolNumber = 610;
+inline constexpr int kM62FirstMotionOutput = 620;  ///< M62-M65 digital outputs
 inline constexpr int kM68AnalogOutput = 680;
 inline constexpr int kM70SaveModalState = 700;
 inline constexpr int kM73SaveAutorestore = 730;

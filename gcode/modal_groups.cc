@@ -41,6 +41,10 @@ int supported_g_group(int code10) {
     case kG21Millimetre:
       return kUnits;
     case kG40CutterCompOff:
+    case kG41CutterCompLeft:
+    case kG42CutterCompRight:
+    case kG41_1DynamicCutterCompLeft:
+    case kG42_1DynamicCutterCompRight:
       return kCutterComp;
     case kG43ToolLength:
     case kG43_1DynamicToolLength:
@@ -87,12 +91,6 @@ int supported_g_group(int code10) {
 // Why volmap refuses a G code it does not read.
 const char* g_refusal(int code10) {
   switch (code10) {
-    case kG41CutterCompLeft:
-    case kG42CutterCompRight:
-    case kG41_1DynamicCutterCompLeft:
-    case kG42_1DynamicCutterCompRight:
-      return "cutter radius compensation (G41/G42) is not supported: the post-processor "
-             "needs the tool centre path; output it from CAM with G40";
     case kG38_2Probe:
     case kG38_3Probe:
     case kG38_4Probe:

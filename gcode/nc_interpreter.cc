@@ -53,8 +53,9 @@ void Interpreter::set_dialect(Dialect d) {
 bool Interpreter::execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion) {
   // execute()'s short path, less what cannot fail here: no F word, no
   // other letter, the position known, G1 with a feed rate.
-  if (s_.ended || s_.motion != kG1Linear || fanuc() || !s_.position_known ||
-      (s_.feed <= 0.0 && s_.feed_mode != kG93InverseTime) || given == 0 || given > 7)
+  if (s_.ended || s_.motion != kG1Linear || fanuc() || !s_.position_known || s_.comp_side != 0 ||
+      s_.comp_exit_pending || (s_.feed <= 0.0 && s_.feed_mode != kG93InverseTime) || given == 0 ||
+      given > 7)
     return false;
   straight_move(work_offset(), value, given, s_, motion);
   return true;
@@ -68,6 +69,7 @@ State Interpreter::check(const Block& b, BlockEffect& effect) const {
   effect.g53 = false;
   effect.stop_code = false;
   effect.motion_code = -1;
+  effect.comp_role = CompRole::kNone;
   effect.more_holes.clear();
   effect.homed_axes = 0;
   effect.stores_home = false;

@@ -54,6 +54,12 @@ struct Motion {
   double feed = 0.0;  ///< as programmed (units/min, inverse time, per rev)
 };
 
+/// A motion's part in cutter radius compensation (G41/G42): the controller
+/// offsets the programmed path by the tool radius; the first move in the
+/// plane after G41/G42 enters (the controller computes it from the move's
+/// start), the first after G40 leaves.
+enum class CompRole { kNone, kEntry, kCompensated, kExit };
+
 struct State {
   double unit_mm = 1.0;       ///< 25.4 under G20
   bool absolute = true;       ///< G90
@@ -104,7 +110,17 @@ struct State {
   /// LinuxCNC's rs274 then applies the offset of the tool the last M6
   /// loaded (none before any), a machine that of M61's tool: refused, give H.
   bool tool_from_m61 = false;
-  int selected_tool = 0;  ///< last T word
+  int selected_tool = 0;     ///< last T word
+  bool tool_loaded = false;  ///< an M6 or M61 named the tool in the spindle
+  /// Cutter radius compensation: 0 off (G40), 1 left (G41), 2 right (G42),
+  /// the sides swapped by a negative diameter as LinuxCNC swaps them; the
+  /// radius (mm). The controller offsets the path; the post keeps the codes
+  /// (cutter_comp.cc, docs/post.md "Cutter compensation").
+  int comp_side = 0;
+  double comp_radius_mm = 0.0;
+  /// The next move in the XY plane enters the compensation (after G41/G42)
+  /// or leaves it (after G40 with compensation on).
+  bool comp_entry_pending = false, comp_exit_pending = false;
   /// Canned cycles return to the initial level (G98) or to R (G99).
   /// LinuxCNC's interpreter starts in G99 (its retract mode is zero,
   /// R_PLANE, until G98; rs274 shows it), not G98.
@@ -152,8 +168,9 @@ struct BlockEffect {
   bool has_motion = false;
   Motion motion;
   bool g53 = false;
-  bool stop_code = false;  ///< M0 M1 M2 M30 M60 in the block
-  int motion_code = -1;    ///< motion G code written in this block, x10, or -1
+  bool stop_code = false;                ///< M0 M1 M2 M30 M60 in the block
+  int motion_code = -1;                  ///< motion G code written in this block, x10, or -1
+  CompRole comp_role = CompRole::kNone;  ///< the motion's, in cutter compensation
   /// G92 or G10 L20 with axis words: offsets set from where the tool
   /// stands, which on the machine is where the post's command put it.
   bool offsets_from_position = false;

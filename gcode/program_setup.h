@@ -29,6 +29,10 @@ struct ProgramSetup {
   /// .tbl Z: how much longer the tool is than the one whose offset is zero,
   /// the machine file's tool).
   std::map<int, double> tool_length_mm;
+  /// Tool table: tool number -> diameter, mm (a .tbl D), for cutter
+  /// compensation (G41/G42 D). A Fanuc program's D offset number n reads
+  /// the row T n.
+  std::map<int, double> tool_diameter_mm;
   /// Where the tool stands when the program starts (machine coordinates, mm),
   /// when known: lets a program that never commands an axis (a 2D plasma
   /// program without Z) be corrected. Unknown by default: then the first

@@ -311,6 +311,7 @@ void ProgramPost::add_kept_arc_piece_lines(const ArcPlan& plan, bool step, const
     bool needed = false;
     for (int a = 0; a < 3; ++a) needed = needed || axis_needs_word(a, c0, nullptr, false);
     if (needed) {
+      if (comp_move_) refuse_comp_take_up();
       words_.clear();
       append_axis_words(c0, false, lower, spaces, words_);
       lines.push_back({false, std::string(words_.view()), c0, {}});

@@ -105,6 +105,11 @@ struct PostReport {
   /// The program was flattened, but no line of the flattened part needed a
   /// change: that part was written back as it was read, not flat.
   bool flattened_written_as_read = false;
+  /// Cutter compensation kept (G41/G42): moves under it, the largest tool
+  /// radius, and the largest bound of how far the controller's offset of
+  /// the corrected contour can leave the tool off (mm; docs/post.md).
+  std::uint64_t comp_moves = 0;
+  double comp_radius_mm = 0.0, comp_bound_mm = 0.0;
   /// How the program was read: its tape frame, whether it was flattened.
   nc::ReadReport read;
 };

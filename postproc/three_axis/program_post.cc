@@ -129,8 +129,10 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
     emitted_mm_.z() -= offset - offset_before;
   if (!interp_.state().cycle_il_known) ctrl_il_known_ = false;
   const Corrector& c = corrector();
+  check_compensation(c, fx);
   if (fx.has_motion && interp_.state().position_known)
-    check_travel(machine_, fx.motion, c, interp_.state().origin_mm, *line_file_, number);
+    check_travel(machine_, fx.motion, c, interp_.state().origin_mm, *line_file_, number,
+                 fx.comp_role == nc::CompRole::kNone ? 0.0 : comp_travel_margin_mm());
   if (fx.stores_home && !c.zero())
     throw InputError(*line_file_, number,
                      "G28.1/G30.1 store where the controller stands, which the correction "
@@ -343,13 +345,39 @@ void ProgramPost::feed_line(std::string_view text, const nc::Block& b, const nc:
   const nc::Motion& m = fx.motion;
   const bool lower = style.lower, spaces = style.spaces;
   const Vector3d start_cmd = emitted_mm_;
-  if (m.kind == nc::MotionKind::kArc && options_.keep_arcs && keep_arc(text, b, fx, c, style))
+  // The entry and exit moves of cutter compensation stay one move: the
+  // controller computes them from their start, which a split would move.
+  const bool one_piece =
+      fx.comp_role == nc::CompRole::kEntry || fx.comp_role == nc::CompRole::kExit;
+  const std::uint64_t arcs_split_before = report_.arcs_split;
+  const bool compensated = fx.comp_role != nc::CompRole::kNone && !c.zero();
+  if (m.kind == nc::MotionKind::kArc && options_.keep_arcs && keep_arc(text, b, fx, c, style)) {
+    if (one_piece && report_.arcs_split != arcs_split_before) refuse_comp_split(fx);
+    if (compensated && report_.arcs_split != arcs_split_before)
+      check_comp_pieces(c,
+                        std::hypot(m.end_mm.x() - m.center_mm.x(), m.end_mm.y() - m.center_mm.y()));
     return;
+  }
+  if (one_piece && m.kind == nc::MotionKind::kArc) refuse_comp_split(fx);
+  if (compensated && m.kind == nc::MotionKind::kArc)
+    throw InputError(*line_file_, current_line_,
+                     "an arc under cutter compensation that volmap would write as straight "
+                     "pieces (--linearize-arcs, or an arc it cannot keep): the controller "
+                     "would not trim their inside corners below 0.05 rad, and the tool would "
+                     "cut into the part; keep arcs as arcs, or output the tool centre path "
+                     "from CAM (G40)");
   if (m.kind == nc::MotionKind::kArc) {
     ++report_.arcs_linearized;
     output_left_arc_mode_ = true;
   }
   const std::vector<Piece>& pieces = segment(c, m, start_cmd);
+  if (one_piece && pieces.size() > 1) refuse_comp_split(fx);
+  if (compensated && pieces.size() > 1) {
+    double shortest = 1.0, s_prev = 0.0;  // (of the move, 0 .. 1)
+    for (const Piece& p : pieces) shortest = std::min(shortest, p.s_end - s_prev), s_prev = p.s_end;
+    check_comp_pieces(
+        c, shortest * std::hypot(m.end_mm.x() - m.start_mm.x(), m.end_mm.y() - m.start_mm.y()));
+  }
   const bool arc = m.kind == nc::MotionKind::kArc;
   const bool polar = b.has('@') || b.has('^');  // rewritten as X Y when changed (see the rapids)
   const nc::State& s = interp_.state();

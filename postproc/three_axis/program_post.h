@@ -430,6 +430,23 @@ class ProgramPost {
     emitted_exact_ = !interp_.state().absolute;
   }
   bool emitted_known_ = false;
+  // Cutter compensation kept (cutter_comp.cc): the bound of the controller's
+  // offset of the corrected contour at corners and pieces; the last move's
+  // end tangent (XY; zero: none), length (arc: radius) and corner factor g
+  // (comp_bound.h); this move compensated with errors; the refusals.
+  void check_compensation(const Corrector& c, const nc::BlockEffect& fx);
+  void check_comp_pieces(const Corrector& c, double piece_lever_mm);
+  void check_comp_bound(double bound_mm, const char* where, double g, double L);
+  Eigen::Vector2d comp_tangent_in_ = Eigen::Vector2d::Zero();
+  double comp_lever_in_ = 0.0, comp_factor_ = 2.0;
+  bool comp_move_ = false;
+  [[noreturn]] void refuse_comp_take_up() const;
+  [[noreturn]] void refuse_comp_split(const nc::BlockEffect& fx) const;
+  /// The tool centre's reach off the programmed path in X or Y: r / c at a
+  /// corner (c = cos of half the turn; g / 2 >= 1 / c), at least sqrt 2 r.
+  double comp_travel_margin_mm() const {
+    return interp_.state().comp_radius_mm * std::max(M_SQRT2, comp_factor_ / 2);
+  }
   ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
   int current_line_ = 0;
   char line_ending_[2] = {};  ///< the line's ending as read: "", "\n", "\r" or "\r\n"

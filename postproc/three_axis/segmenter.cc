@@ -159,6 +159,7 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
             // commanded at once instead, at the start point with the new
             // directions (the actual tip stays on the start point while the
             // play is taken up), and the piece goes on from there.
+            if (comp_move_) refuse_comp_take_up();
             const Vector3d c_step = command(c, n0p, d);
             done.push_back({c_step, p.s0});
             c_prev = c_step;

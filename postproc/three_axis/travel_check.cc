@@ -70,11 +70,24 @@ void for_each_extreme(const nc::Motion& m, F&& f) {
 }  // namespace
 
 void check_travel(const Machine& machine, const nc::Motion& m, const Corrector& c,
-                  const Eigen::Vector3d& origin_mm, const std::string& file, int line) {
-  for_each_extreme(m, [&](const Eigen::Vector3d& p) {
+                  const Eigen::Vector3d& origin_mm, const std::string& file, int line,
+                  double xy_margin_mm) {
+  const auto check = [&](const Eigen::Vector3d& p) {
     const Eigen::Vector3d u = c.axis_position(p);
     const int a = first_axis_outside_travel(machine, u.data(), 3);
     if (a >= 0) throw_outside(machine, a, u[a], origin_mm, file, line);
+  };
+  for_each_extreme(m, [&](const Eigen::Vector3d& p) {
+    check(p);
+    if (xy_margin_mm > 0)
+      for (int k = 0; k < 4; ++k)
+        check(p + Eigen::Vector3d(k == 0   ? xy_margin_mm
+                                  : k == 1 ? -xy_margin_mm
+                                           : 0.0,
+                                  k == 2   ? xy_margin_mm
+                                  : k == 3 ? -xy_margin_mm
+                                           : 0.0,
+                                  0.0));
   });
 }
 

@@ -17,8 +17,11 @@ namespace volmap::post {
 /// cycle's R plane and clearance level, each as the axes reach it with tool
 /// length compensation (Corrector::axis_position). The message names the
 /// likely cause: no work offset (origin_mm at the machine's zero), or a
-/// program that lies outside the travel at its origin.
+/// program that lies outside the travel at its origin. Under cutter
+/// compensation the tool centre is off the programmed path by up to
+/// xy_margin_mm in X and Y: each point is checked that far either side.
 void check_travel(const Machine& machine, const nc::Motion& m, const Corrector& c,
-                  const Eigen::Vector3d& origin_mm, const std::string& file, int line);
+                  const Eigen::Vector3d& origin_mm, const std::string& file, int line,
+                  double xy_margin_mm = 0.0);
 
 }  // namespace volmap::post

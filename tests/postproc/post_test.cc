@@ -60,7 +60,9 @@ const char* kNcFiles = "/usr/share/linuxcnc/ncfiles/";
 
 TEST(NcInterpreter, RefusesUnsupportedAndInvalidBlocks) {
   const std::pair<const char*, const char*> cases[] = {
-      {"G41 D1", "cutter radius compensation"},
+      {"G41 D1", "G41/G42 uses tool 1, whose diameter the tool table does not give"},
+      {"G41.1", "G41.1/G42.1 needs D"},
+      {"G1 X1 D2", "D word with no G41"},
       {"G0 G1 X1", "same modal group"},
       {"G28", "#5161"},
       {"G92 X0", "from where the tool stands"},
