@@ -206,6 +206,13 @@ Runner register_verify(CLI::App& app) {
       r = post::verify_programs(a, o->nominal, b, o->program, m, e, setup, opt);
     }
     write_report(report.get(), *o, m, r, false);
+    if (r.comp_radius_mm > 0)
+      std::cerr << fmt::format(
+          "note: the programs keep cutter compensation (G41/G42, tool radius up to {:g} mm): "
+          "verify measures their programmed contours; the controller offsets them by the "
+          "radius, which adds at most the bound `volmap post` checked (a quarter of its "
+          "tolerance; docs/post.md)\n",
+          r.comp_radius_mm);
     if (o->json) {
       nlohmann::ordered_json doc;
       auto stats = [](const post::DeviationStats& s) {
@@ -216,6 +223,7 @@ Runner register_verify(CLI::App& app) {
       };
       doc["before"] = stats(r.before);
       doc["after"] = stats(r.after);
+      if (r.comp_radius_mm > 0) doc["cutter_compensation_radius_mm"] = r.comp_radius_mm;
       std::cout << doc.dump(2) << "\n";
       return verdict(*o, r.before, r.after);
     }

@@ -130,7 +130,7 @@ bool ProgramPost::kept_arc_lines(const nc::Motion& m, const Corrector& c, bool l
   // over the arc the same bounds hold), so steps of sqrt(8 * 0.05 tol / M)
   // rad. No bounds (a compensation table): linearised.
   const double M = c.curvature_bound() * r_max * r_max + 2 * c.lipschitz_bound() * r_max;
-  plan.step_rad = std::min(0.05, M > 0 ? std::sqrt(0.4 * options_.tolerance_mm / M) : 0.05);
+  plan.step_rad = std::min(0.05, M > 0 ? std::sqrt(0.4 * path_tolerance_mm() / M) : 0.05);
   if (!(plan.step_rad > 0) || !(std::abs(g.sweep) / plan.step_rad <= 1e6)) return false;
   // The cuts that lost motion needs: where an axis turns round and its
   // error jumps by more than a quarter of the tolerance.
@@ -144,7 +144,7 @@ bool ProgramPost::kept_arc_lines(const nc::Motion& m, const Corrector& c, bool l
     if (s_cut >= 1.0 - margin) break;
     if (s_cut <= margin) continue;
     const int a = turning_axis(g, q);
-    if (c.reversal_jump_mm(nc::point_on(m, s_cut), a, last_dir_) > 0.25 * options_.tolerance_mm)
+    if (c.reversal_jump_mm(nc::point_on(m, s_cut), a, last_dir_) > 0.25 * path_tolerance_mm())
       cuts.push_back(s_cut);
     if (cuts.size() > kMaxKeptPieces) return false;
   }
@@ -249,7 +249,7 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   // quarter of the tolerance).
   if (const double move = c1[n] - c0[n];
       move != 0 && c.bidirectional(n) && (move > 0 ? 1 : -1) != d0[static_cast<size_t>(n)] &&
-      c.reversal_jump_mm(c0, n, d0) > 0.25 * options_.tolerance_mm)
+      c.reversal_jump_mm(c0, n, d0) > 0.25 * path_tolerance_mm())
     return false;
   double worst = 0.0;
   if (!kept_arc_samples(m, cmd, c, d0, std::abs(pg.sweep) / plan.step_rad, worst)) return false;
@@ -261,7 +261,7 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
     for (double q = std::ceil(lo / (M_PI / 2)); q * (M_PI / 2) <= hi; q += 1) {
       const double t = (q * (M_PI / 2) - gc.start_angle) / gc.sweep;
       if (c.reversal_jump_mm(nc::point_on(cmd, t), turning_axis(gc, q), d0) >
-          0.25 * options_.tolerance_mm)
+          0.25 * path_tolerance_mm())
         return false;
     }
   }
@@ -284,8 +284,8 @@ bool ProgramPost::kept_arc_samples(const nc::Motion& m, const nc::Motion& cmd, c
   const int samples = std::max(16, static_cast<int>(std::ceil(min_samples)));
   Vector3d h(d0[0], d0[1], d0[2]);
   const double limit = std::max(
-      0.5 * options_.tolerance_mm,
-      options_.tolerance_mm - 2 * std::sqrt(3.0) * half_unit(decimals()) * interp_.state().unit_mm);
+      0.5 * path_tolerance_mm(),
+      path_tolerance_mm() - 2 * std::sqrt(3.0) * half_unit(decimals()) * interp_.state().unit_mm);
   Vector3d previous = cmd.start_mm;
   for (int j = 0; j <= samples; ++j) {
     const Vector3d x = nc::point_on(cmd, static_cast<double>(j) / samples);

@@ -57,15 +57,9 @@ void ProgramPost::check_compensation(const Corrector& c, const nc::BlockEffect& 
     extra_mm = comp_threshold_term_mm(comp_tangent_in_, t_out, s.comp_side, r, margin);
   }
   comp_factor_ = g;
-  if (comp_move_ && role == nc::CompRole::kCompensated && t_out.isZero(0.0))
-    // The correction of a move along Z alone changes X and Y a little: a
-    // move in the plane, which the controller would offset as a corner.
-    throw InputError(*line_file_, current_line_,
-                     "a move along Z alone under cutter compensation: its correction would "
-                     "move X and Y by a few µm, a move in the plane of which the controller "
-                     "would make a corner of the offset path (LinuxCNC refuses most such "
-                     "corners as gouging); give G40 before the Z move and G41/G42 after it, or "
-                     "output the tool centre path from CAM (G40)");
+  // The correction of a move along Z alone would move X and Y a little: a
+  // move in the plane, which the controller would offset as a corner.
+  comp_hold_xy_ = comp_move_ && role == nc::CompRole::kCompensated && t_out.isZero(0.0);
   const Eigen::Vector2d t_end = xy_tangent(m, true);
   if (!t_end.isZero(0.0)) comp_tangent_in_ = t_end, comp_lever_in_ = lever;
   if (role == nc::CompRole::kExit) comp_tangent_in_.setZero();
@@ -113,6 +107,30 @@ void ProgramPost::check_comp_bound(double bound_mm, const char* where, double g,
                   "{:g} or more, or output the tool centre path from CAM (G40)",
                   where, r, bound_mm * 1e3, g, L, allowed_mm * 1e3,
                   std::isfinite(bound_mm) ? std::ceil(bound_mm * 4e3 * 100) / 100 : INFINITY));
+}
+
+Vector3d ProgramPost::held_xy_command(const Corrector& c, const Vector3d& nominal,
+                                      const ApproachDirections& d) {
+  Vector3d cmd(emitted_mm_.x(), emitted_mm_.y(), nominal.z());
+  for (int k = 0; k < 20; ++k) {  // a contraction by about L: a few steps
+    const double z = nominal.z() - c.error_at(cmd, d).z();
+    const bool done = std::abs(z - cmd.z()) < solve_accuracy_mm();
+    cmd.z() = z;
+    if (done) break;
+  }
+  // X and Y stay off by how much their errors change over the Z travel.
+  const double off_mm = (cmd + c.error_at(cmd, d) - nominal).norm();
+  report_.max_deviation_mm = std::max(report_.max_deviation_mm, off_mm);
+  if (off_mm > path_tolerance_mm())
+    throw InputError(*line_file_, current_line_,
+                     fmt::format("a move along Z alone under cutter compensation: X and Y stay "
+                                 "where they are (a move in the plane would be a corner for the "
+                                 "controller), and their errors change by {:.3g} µm over the Z "
+                                 "travel, more than the tolerance allows ({:g} µm); give G40 "
+                                 "before the Z move and G41/G42 after it, or output the tool "
+                                 "centre path from CAM (G40)",
+                                 off_mm * 1e3, path_tolerance_mm() * 1e3));
+  return cmd;
 }
 
 void ProgramPost::refuse_comp_take_up() const {

@@ -16,6 +16,10 @@ Vector3d ProgramPost::position_command(const Corrector& c, const Vector3d& from,
                                        bool z_down, ApproachDirections& d) {
   d = directions_of(from, to, last_dir_);
   if (z_down) d[2] = -1;
+  if (comp_hold_xy_) {
+    last_dir_ = d;
+    return held_xy_command(c, to, d);
+  }
   Vector3d cmd = command(c, to, d);
   if (emitted_known_) {
     ApproachDirections settled = d;

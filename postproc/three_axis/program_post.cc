@@ -370,7 +370,13 @@ void ProgramPost::feed_line(std::string_view text, const nc::Block& b, const nc:
     ++report_.arcs_linearized;
     output_left_arc_mode_ = true;
   }
-  const std::vector<Piece>& pieces = segment(c, m, start_cmd);
+  if (comp_hold_xy_ && m.kind != nc::MotionKind::kArc) {
+    const ApproachDirections d = directions_of(m.start_mm, m.end_mm, last_dir_);
+    last_dir_ = d;
+    pieces_.assign(1, Piece{held_xy_command(c, m.end_mm, d), 1.0});
+  }
+  const std::vector<Piece>& pieces =
+      comp_hold_xy_ && m.kind != nc::MotionKind::kArc ? pieces_ : segment(c, m, start_cmd);
   if (one_piece && pieces.size() > 1) refuse_comp_split(fx);
   if (compensated && pieces.size() > 1) {
     double shortest = 1.0, s_prev = 0.0;  // (of the move, 0 .. 1)

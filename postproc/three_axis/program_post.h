@@ -439,7 +439,14 @@ class ProgramPost {
   void check_comp_bound(double bound_mm, const char* where, double g, double L);
   Eigen::Vector2d comp_tangent_in_ = Eigen::Vector2d::Zero();
   double comp_lever_in_ = 0.0, comp_factor_ = 2.0;
-  bool comp_move_ = false;
+  bool comp_move_ = false, comp_hold_xy_ = false;
+  /// The tolerance a compensated move's pieces keep: three quarters, the
+  /// controller's offset taking the last quarter (check_comp_bound).
+  double path_tolerance_mm() const { return (comp_move_ ? 0.75 : 1.0) * options_.tolerance_mm; }
+  /// A move along Z alone under compensation: X and Y held where the
+  /// controller stands (a move in the plane would be a corner), Z corrected.
+  Vector3d held_xy_command(const Corrector& c, const Vector3d& nominal,
+                           const ApproachDirections& d);
   [[noreturn]] void refuse_comp_take_up() const;
   [[noreturn]] void refuse_comp_split(const nc::BlockEffect& fx) const;
   /// The tool centre's reach off the programmed path in X or Y: r / c at a

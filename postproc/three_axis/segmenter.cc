@@ -17,7 +17,7 @@ namespace volmap::post {
 constexpr int kMaxArcPieces = 1 << 16;
 
 int ProgramPost::arc_initial_pieces(const nc::Motion& m) const {
-  const double tol = options_.tolerance_mm;
+  const double tol = path_tolerance_mm();
   // Initial pieces: arcs so that the chord error is below tol / 4.
   const nc::ArcGeometry g = nc::arc_geometry(m);
   const double r = std::max(g.radius, g.end_radius);
@@ -83,14 +83,14 @@ double ProgramPost::sampled_deviation(const Corrector& c, const nc::Motion& m, d
     const Vector3d x = c0 + t * (c1 - c0);
     const Vector3d nominal = nc::point_on(m, s0 + t * (s1 - s0));
     worst = std::max(worst, (x + c.error_at(x, d) - nominal).norm());
-    if (worst > options_.tolerance_mm) break;
+    if (worst > path_tolerance_mm()) break;
   }
   return worst;
 }
 
 const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Motion& m,
                                                const Vector3d& start_cmd) {
-  const double tol = options_.tolerance_mm;
+  const double tol = path_tolerance_mm();
   // Initial pieces: arcs so that the chord error is below tol / 4; a line whole.
   const int n0 = m.kind == nc::MotionKind::kArc ? arc_initial_pieces(m) : 1;
   std::vector<Piece>& done = pieces_;

@@ -31,7 +31,8 @@ struct FeedMove {
 // Feed moves of a program, as the interpreter sees them.
 std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
                                  const nc::ProgramSetup& setup, double default_tool_mm,
-                                 const std::vector<std::string>& subroutine_path) {
+                                 const std::vector<std::string>& subroutine_path,
+                                 double& comp_radius_mm) {
   nc::Interpreter interp(setup, name);
   nc::ProgramReader reader(in, name, interp, subroutine_path);
   std::vector<FeedMove> out;
@@ -48,6 +49,8 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
     b.evaluated = l.rewritten;
     interp.execute(b, fx);
     if (!fx.has_motion) continue;
+    if (fx.comp_role != nc::CompRole::kNone)
+      comp_radius_mm = std::max(comp_radius_mm, interp.state().comp_radius_mm);
     // The machine file's tool (offset zero) plus the active tool length offset.
     const double L = default_tool_mm + interp.state().tool_length_mm;
     nc::Motion m = fx.motion;
@@ -192,12 +195,13 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
                              std::istream& compensated, const std::string& compensated_name,
                              const Machine& machine, const ErrorSet& errors,
                              const nc::ProgramSetup& setup, const VerifyOptions& options) {
-  const std::vector<FeedMove> nom =
-      feed_moves(nominal, nominal_name, setup, machine.tool_length_mm, options.subroutine_path);
-  const std::vector<FeedMove> out = feed_moves(compensated, compensated_name, setup,
-                                               machine.tool_length_mm, options.subroutine_path);
-  Run run(machine, errors, options.outside);
   VerifyResult r;
+  const std::vector<FeedMove> nom = feed_moves(nominal, nominal_name, setup, machine.tool_length_mm,
+                                               options.subroutine_path, r.comp_radius_mm);
+  const std::vector<FeedMove> out =
+      feed_moves(compensated, compensated_name, setup, machine.tool_length_mm,
+                 options.subroutine_path, r.comp_radius_mm);
+  Run run(machine, errors, options.outside);
   std::vector<FeedMove> nominal_path;
   for (const FeedMove& f : nom)
     if (f.measured) nominal_path.push_back(f);

@@ -34,6 +34,11 @@ struct DeviationStats {
 
 struct VerifyResult {
   DeviationStats before, after;
+  /// The largest tool radius of cutter compensation (G41/G42) in either
+  /// program, mm (0: none). Verify measures the programmed contours; the
+  /// controller offsets them by the radius, which adds at most what
+  /// `volmap post` bounds (docs/post.md, "Cutter compensation").
+  double comp_radius_mm = 0.0;
 };
 
 struct VerifyOptions {

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/model/errors_csv.h"
@@ -29,13 +30,13 @@ const fs::path& dir() {
   return d;
 }
 
-// Tools 1 (6 mm), 2 (10 mm) and 3 (-4 mm: the side swapped), in inches for
+// Tools 1 (1/8 in, the real program's), 2 (10 mm) and 3 (-4 mm: the side swapped), in inches for
 // rs274 and in mm for volmap.
 std::pair<std::string, std::string> diameter_tables() {
   const std::string inch = (dir() / "d-inch.tbl").string(), mm = (dir() / "d-mm.tbl").string();
   std::ofstream fi(inch), fm(mm);
   int tool = 0;
-  for (double d : {6.0, 10.0, -4.0}) {
+  for (double d : {3.175, 10.0, -4.0}) {
     ++tool;
     fi << fmt::format("T{0} P{0} D{1:.9f} Z0 ;\n", tool, d / 25.4);
     fm << fmt::format("T{0} P{0} D{1} Z0 ;\n", tool, d);
@@ -94,8 +95,8 @@ const Kept kKept[] = {
      "G21 G90\nG0 X100 Y-20 Z5\nG1 Z-1 F250\nG42.1 D8 X100 Y0\nX150\nG3 X170 Y20 I0 J20\n"
      "G1 Y60\nX100\nY0\nG40 G0 Z5\nG0 X100 Y-20\nM2\n"},
     {"negative-diameter.ngc",
-     "G21 G90\nT3 M6\nG0 X-10 Y0 Z3\nG1 Z-1 F200\nG42 D3 X0 Y0\nX40 Y5\nX60 Y30\n"
-     "X20 Y50 Z-1.5\nX0 Y0\nG40 X-10 Y0\nG0 Z3\nM2\n"},
+     "G21 G90\nT3 M6\nG0 X-10 Y0 Z3\nG1 Z-1 F200\nG42 D3 X0 Y0\nX40 Y5\nX60 Y30\nG1 Z-1.5\n"
+     "X20 Y50\nG0 Z2\nX0 Y0\nG1 Z-1\nX10 Y-5\nG40 X-10 Y0\nG0 Z3\nM2\n"},
     {"long-sides.ngc",
      "G21 G90\nT1 M6\nG0 X0 Y-10 Z5\nG1 Z0 F500\nG41 D1 X0 Y0\nX250 Y3\nY180\nX0 Y176\nY0\n"
      "G40 G1 X0 Y-10\nM2\n"},
@@ -111,9 +112,15 @@ TEST(CutterCompensation, KeptCompensationPutsTheToolCentreWithinToleranceAsRs274
   const post::Corrector c(m, e, m.tool_length_mm, OutsidePolicy::kError);
   const Eigen::Vector3d wo(100, 100, 100);
   constexpr double kToleranceUm = 40;
-  for (const Kept& k : kKept) {
+  std::vector<Kept> programs(std::begin(kKept), std::end(kKept));
+  // A real program: Ed Nisley's door latch cam (tests/data/real, SOURCES.md),
+  // G42 D1 with Z steps under compensation, O-word loops (written flat).
+  const std::string nisley =
+      test::source_path("tests/data/real/nc/linuxcnc-nisley-door-latch-cam.ngc");
+  programs.push_back({"nisley", nullptr});
+  for (const Kept& k : programs) {
     SCOPED_TRACE(k.name);
-    const std::string in = write_program(k.name, k.text);
+    const std::string in = k.text ? write_program(k.name, k.text) : nisley;
     const std::string out = (dir() / (std::string("post-") + k.name)).string();
     const std::string cmd =
         test::volmap_binary() +
@@ -141,6 +148,15 @@ TEST(CutterCompensation, KeptCompensationPutsTheToolCentreWithinToleranceAsRs274
     EXPECT_LT(after_um, kToleranceUm + 0.1);
     std::printf("%s: tool centre off the nominal one: before %.2f um, after %.2f um\n", k.name,
                 before_um, after_um);
+    // verify reads both, measures the programmed contours and says so.
+    const test::CliResult v = test::run_volmap(fmt::format(
+        "verify --machine {} --errors {} --work-offset 100,100,100 --tool-table {} --nominal {} "
+        "--program {} --tolerance-um {} --json",
+        machine, errors, mm, in, out, kToleranceUm));
+    EXPECT_EQ(v.status, 0) << v.err;
+    EXPECT_NE(v.err.find("keep cutter compensation"), std::string::npos) << v.err;
+    const nlohmann::json doc = nlohmann::json::parse(v.out);
+    EXPECT_GT(doc.at("cutter_compensation_radius_mm").get<double>(), 1.58);
   }
 }
 
@@ -178,13 +194,11 @@ const Refused kRefused[] = {
     {"G41 D1 X0 Y0\nG43 H1\nG40 X-20\n", true, "tool length offset"},
     {"G41 D1 X0 Y0\nG18\nG40 X-20\n", true, "a change of plane"},
     {"G41 D1 X0 Y0\nX10\nG40\nG2 X20 Y0 R5\n", true, "must be straight"},
-    {"G41 D1 X0 Y0\nX10\nG3 X12 Y2 R2\nG40 X-20\n", true, "not less than arc radius"},
+    {"G41 D1 X0 Y0\nX10\nG3 X11.5 Y1.5 R1.5\nG40 X-20\n", true, "not less than arc radius"},
     {"G41 D1 X0 Y0\nG92 X0\nG40 X-20\n", true, "a change of offsets"},
     // volmap's own: another plane, and a program whose kept compensation
     // would leave the tolerance (1 um here, default).
     {"G18\nG41 D1 X0 Z0\nG40 X-20\n", false, "XY plane (G17) only"},
-    {"G41 D1 X0 Y0\nX10\nG1 Z-2\nX20\nG40 X-20\n", false,
-     "a move along Z alone under cutter compensation"},
 };
 
 TEST(CutterCompensation, WhatRs274RefusesUnderCompensationVolmapRefusesWithFileLine) {
@@ -220,13 +234,14 @@ TEST(CutterCompensation, ABoundAboveAQuarterOfTheToleranceIsRefusedWithItsNumber
       test::source_path("samples/machines/hsu-3axis.json"),
       test::source_path("samples/errors/hsu-3axis.csv"), mm, in, out));
   EXPECT_EQ(r.status, 1);
-  // The entry (line 5): radius 3 mm, g = 2 + r / sqrt(d^2 - r^2) with d the
-  // entry's 14.14 mm, and the sample's slope bound.
+  // The entry (line 5): radius 1.5875 mm, g = 2 + r / sqrt(d^2 - r^2) with
+  // d the entry's 14.14 mm, and the sample's slope bound.
   const Machine m = load_machine_json(test::source_path("samples/machines/hsu-3axis.json"));
   const ErrorSet e = load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv"));
   const post::Corrector c(m, e, m.tool_length_mm, OutsidePolicy::kError);
-  const double d = std::sqrt(200.0), g = 2 + 3 / std::sqrt(d * d - 9);
-  const double bound_um = g * 3 * c.lipschitz_bound() * 1e3;
+  const double radius = 3.175 / 2, d = std::sqrt(200.0);
+  const double g = 2 + radius / std::sqrt(d * d - radius * radius);
+  const double bound_um = g * radius * c.lipschitz_bound() * 1e3;
   EXPECT_NE(r.err.find("bound.ngc:5: the entry move of cutter compensation"), std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find(fmt::format("up to {:.3g} µm off", bound_um)), std::string::npos) << r.err;
