@@ -247,9 +247,9 @@ bool ProgramPost::kept_arc_piece(const nc::Motion& m, const ArcPlan& plan, const
   // The normal axis commanded the way d says (a creep against it would be
   // lost in the play of an axis with lost motion, unless that is within a
   // quarter of the tolerance).
-  if (const double move = c1[n] - c0[n];
-      move != 0 && c.bidirectional(n) && (move > 0 ? 1 : -1) != d0[static_cast<size_t>(n)] &&
-      c.reversal_jump_mm(c0, n, d0) > 0.25 * path_tolerance_mm())
+  if (const double move = c1[n] - c0[n]; move != 0 && c.bidirectional(n) &&
+                                         (move > 0 ? 1 : -1) != d0[static_cast<size_t>(n)] &&
+                                         c.reversal_jump_mm(c0, n, d0) > 0.25 * path_tolerance_mm())
     return false;
   double worst = 0.0;
   if (!kept_arc_samples(m, cmd, c, d0, std::abs(pg.sweep) / plan.step_rad, worst)) return false;

@@ -109,6 +109,11 @@ void ProgramPost::check_comp_bound(double bound_mm, const char* where, double g,
                   std::isfinite(bound_mm) ? std::ceil(bound_mm * 4e3 * 100) / 100 : INFINITY));
 }
 
+double ProgramPost::comp_travel_margin_mm() const {
+  // r / c at a corner (g / 2 >= 1 / c), at least sqrt 2 r.
+  return interp_.state().comp_radius_mm * std::max(M_SQRT2, comp_factor_ / 2);
+}
+
 Vector3d ProgramPost::held_xy_command(const Corrector& c, const Vector3d& nominal,
                                       const ApproachDirections& d) {
   Vector3d cmd(emitted_mm_.x(), emitted_mm_.y(), nominal.z());

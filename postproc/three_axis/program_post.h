@@ -431,29 +431,21 @@ class ProgramPost {
   }
   bool emitted_known_ = false;
   // Cutter compensation kept (cutter_comp.cc): the bound of the controller's
-  // offset of the corrected contour at corners and pieces; the last move's
-  // end tangent (XY; zero: none), length (arc: radius) and corner factor g
-  // (comp_bound.h); this move compensated with errors; the refusals.
+  // offset of the corrected contour; the last move's end tangent (XY; zero:
+  // none), length (arc: radius), corner factor g (comp_bound.h); pieces kept
+  // to 3/4 of the tolerance; Z-only moves with X and Y held; the refusals.
   void check_compensation(const Corrector& c, const nc::BlockEffect& fx);
   void check_comp_pieces(const Corrector& c, double piece_lever_mm);
   void check_comp_bound(double bound_mm, const char* where, double g, double L);
   Eigen::Vector2d comp_tangent_in_ = Eigen::Vector2d::Zero();
   double comp_lever_in_ = 0.0, comp_factor_ = 2.0;
   bool comp_move_ = false, comp_hold_xy_ = false;
-  /// The tolerance a compensated move's pieces keep: three quarters, the
-  /// controller's offset taking the last quarter (check_comp_bound).
   double path_tolerance_mm() const { return (comp_move_ ? 0.75 : 1.0) * options_.tolerance_mm; }
-  /// A move along Z alone under compensation: X and Y held where the
-  /// controller stands (a move in the plane would be a corner), Z corrected.
   Vector3d held_xy_command(const Corrector& c, const Vector3d& nominal,
                            const ApproachDirections& d);
   [[noreturn]] void refuse_comp_take_up() const;
   [[noreturn]] void refuse_comp_split(const nc::BlockEffect& fx) const;
-  /// The tool centre's reach off the programmed path in X or Y: r / c at a
-  /// corner (c = cos of half the turn; g / 2 >= 1 / c), at least sqrt 2 r.
-  double comp_travel_margin_mm() const {
-    return interp_.state().comp_radius_mm * std::max(M_SQRT2, comp_factor_ / 2);
-  }
+  double comp_travel_margin_mm() const;
   ApproachDirections last_dir_{};  ///< direction each axis last moved in (0: not yet)
   int current_line_ = 0;
   char line_ending_[2] = {};  ///< the line's ending as read: "", "\n", "\r" or "\r\n"
