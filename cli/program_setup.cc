@@ -16,7 +16,7 @@ void ProgramSetupOptions::add_to(CLI::App& sub) {
   sub.add_option("--tool-table", tool_table,
                  "LinuxCNC tool table (.tbl) for G43 H (five axes: the lengths of the tools the "
                  "program changes to): Z is the tool length offset in mm, relative to the machine "
-                 "file's tool");
+                 "file's tool; D the diameter (mm) for cutter compensation G41/G42 D");
   sub.add_option("--initial-position", initial,
                  "Where the tool stands at the start, X,Y,Z in program coordinates (G54, mm); "
                  "for programs that never command an axis");
