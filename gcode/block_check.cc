@@ -324,8 +324,11 @@ void BlockCheck::unused_words(bool motion_here) {
   if (m_reads_words) return;
   const bool straight = motion_to_be == kG0Rapid || motion_to_be == kG1Linear;
   // (Fanuc: K of a canned cycle is its repeats, canned_cycles.cc.)
+  const bool tap = motion_to_be == kG33_1RigidTap;  // K the pitch, I the return's speed
   for (char L : {'I', 'J', 'K'})
-    unused(L, arc || (setup_.tool_axis_words && straight) || (L == 'K' && cycle && fanuc()),
+    unused(L,
+           arc || (tap && L != 'J') || (setup_.tool_axis_words && straight) ||
+               (L == 'K' && cycle && fanuc()),
            setup_.tool_axis_words ? "G0, G1 (tool axis), G2 or G3" : "G2 or G3");
   unused('R', arc || cycle || g10, "G2, G3, G10 or canned cycle");
   // LinuxCNC's L check knows G73 and G81-G89, not G74: an L on a G74

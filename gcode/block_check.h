@@ -60,6 +60,8 @@ class BlockCheck {
   void polar_target(double at_x, double at_y, bool xy_known, Eigen::Vector3d& target,
                     std::array<bool, 3>& given) const;
   void arc(Motion& mo, const Eigen::Vector3d& target, const std::array<bool, 3>& given);
+  /// G33.1: a rigid tap to `target` and back (block_motion.cc).
+  void rigid_tap(Motion& mo, const Eigen::Vector3d& target) const;
   /// The rotary axes' end (A B C words) of a motion of `kind`.
   void rotary_targets(MotionKind kind);
   /// A tool-vector program's new tool axis (I J K of a straight move).

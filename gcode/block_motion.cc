@@ -80,6 +80,9 @@ void BlockCheck::motion(int motion_before) {
     arc(mo, target, given);
   } else if (is_cycle(mode)) {
     target = cycle(mo, motion_before, at_x, at_y, xy_known, target);
+  } else if (mode == kG33_1RigidTap) {
+    rigid_tap(mo, target);
+    target = mo.start_mm;  // the tap comes back to where it started
   } else {
     fail(nullptr, "axis words without a motion mode; add G0 or G1");
   }
@@ -95,14 +98,36 @@ void BlockCheck::motion(int motion_before) {
   s_.position_known = s_.axis_known[0] && s_.axis_known[1] && s_.axis_known[2];
 }
 
+void BlockCheck::rigid_tap(Motion& mo, const Eigen::Vector3d& target) const {
+  // LinuxCNC (convert_straight, G33.1; checked with rs274): K (the pitch)
+  // in every block, no F, the spindle turning; RIGID_TAP to the end point
+  // and back.
+  const Word* code = g[kMotion];
+  if (fanuc())
+    fail(code,
+         "G33.1 is LinuxCNC's rigid tap; on a Fanuc control tap rigidly with M29 and G84, "
+         "which volmap reads as G84");
+  if (!word('K')) fail(code, "K word missing with g33/g33.1 (the pitch; LinuxCNC refuses it)");
+  if (const Word* f = word('F'))
+    fail(f, "F word used with a g33/g33.1 (the spindle sets the feed; LinuxCNC refuses it)");
+  if (!s_.spindle_turning)
+    fail(code, "spindle not turning in G33.1 (LinuxCNC refuses it): start it with M3 or M4");
+  if (!s_.position_known)
+    fail(code, "G33.1 from an unknown position: command X, Y and Z with a rapid (G0) first");
+  mo.kind = MotionKind::kTap;
+  mo.end_mm = target;
+  mo.r_mm = mo.clear_mm = mo.start_mm.z();
+}
+
 void BlockCheck::rotary_targets(MotionKind kind) {
   for (int r = 0; r < 3; ++r) {
     const Word* w = word("ABC"[r]);
     if (!w) continue;
-    if (kind == MotionKind::kCycle)
-      fail(w, fmt::format("rotary axis word {} in a canned cycle block; move the rotary axes in "
-                          "a block of their own",
-                          w->letter));
+    if (kind == MotionKind::kCycle || kind == MotionKind::kTap)
+      fail(w, fmt::format(
+                  "rotary axis word {} in a canned cycle or tap block; move the rotary axes in "
+                  "a block of their own",
+                  w->letter));
     double& q = s_.rotary_rad[static_cast<size_t>(r)];
     q = s_.absolute ? w->value * units::kRadPerDeg : q + w->value * units::kRadPerDeg;
   }

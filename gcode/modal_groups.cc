@@ -22,6 +22,7 @@ int supported_g_group(int code10) {
     case kG85Bore:
     case kG86BoreSpindleStop:
     case kG89BoreDwell:
+    case kG33_1RigidTap:
       return kMotion;
     case kG17PlaneXY:
     case kG18PlaneZX:
@@ -97,11 +98,10 @@ const char* g_refusal(int code10) {
     case kG38_5Probe:
       return "probing moves (G38.x) cannot be compensated; run them uncompensated";
     case kG33SpindleSynchronised:
-    case kG33_1RigidTap:
     case kG76Threading:
-      return "spindle-synchronised motion (G33, G33.1, G76) is not supported: its moves are "
-             "tied to the spindle's turns, which a correction would break; tap with the cycles "
-             "G84 or G74, or post the threads uncompensated";
+      return "spindle-synchronised threading (G33, G76) is not supported: its passes are "
+             "tied to the spindle's turns, which a correction would break; post the threads "
+             "uncompensated (rigid tapping G33.1, G84 and G74 are read)";
     case kG87BackBore:
     case kG88BoreManualRetract:
       return "back boring (G87) and boring with a manual retract (G88) are not supported; "

@@ -34,7 +34,9 @@
 
 namespace volmap::nc {
 
-enum class MotionKind { kRapid, kLinear, kArc, kCycle };
+/// kTap: LinuxCNC's rigid tap G33.1, a straight move from start to end
+/// synchronised with the spindle, then back to the start.
+enum class MotionKind { kRapid, kLinear, kArc, kCycle, kTap };
 
 struct Motion {
   MotionKind kind = MotionKind::kLinear;

@@ -1,11 +1,14 @@
 // Positioning moves: a rapid (G0) corrected at its end point, and a canned
 // cycle block of one hole in G90 (hole position, bottom and R plane
 // corrected). Cycles of several holes and --expand-cycles: canned_cycles.cc.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
 
+#include "core/common/input_error.h"
 #include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
 #include "postproc/three_axis/program_post.h"
@@ -181,6 +184,48 @@ void ProgramPost::positioning_line(std::string_view text, const nc::Block& b,
     }
   }
   emitted_known_ = true;
+}
+
+void ProgramPost::tap_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                           const Corrector& c, const BlockStyle& style) {
+  const nc::Motion& m = fx.motion;
+  ApproachDirections d = directions_of(m.start_mm, m.end_mm, last_dir_);
+  const Vector3d cmd = command(c, m.end_mm, d);
+  // The controller goes straight from where it stands to the end and back
+  // (the axes turned round): the actual tip both ways against the line.
+  // (the axes the tap moves turned round; the others keep their side).
+  ApproachDirections back = d;
+  for (int a = 0; a < 3; ++a)
+    if (m.end_mm[a] != m.start_mm[a])
+      back[static_cast<size_t>(a)] = static_cast<std::int8_t>(-d[a]);
+  double worst = 0.0;
+  for (const ApproachDirections& dir : {d, back}) {
+    constexpr int kSamples = 16;
+    for (int j = 0; j <= kSamples; ++j) {
+      const Vector3d x = emitted_mm_ + (cmd - emitted_mm_) * (static_cast<double>(j) / kSamples);
+      worst = std::max(worst, nc::distance_to_path(m, x + c.error_at(x, dir)));
+    }
+  }
+  if (worst > options_.tolerance_mm) {
+    // As a canned cycle's feed: the controller's line, said, not refused.
+    if (report_.cycle_warnings.size() < PostReport::kMaxCycleWarnings)
+      report_.cycle_warnings.push_back(
+          {current_line_, worst, line_file_ == &file_ ? std::string() : *line_file_, true});
+    ++report_.cycle_warning_count;
+  } else {
+    report_.max_deviation_mm = std::max(report_.max_deviation_mm, worst);
+  }
+  last_dir_ = back;
+  PositioningEdit e;
+  positioning_axis_words(b, fx, cmd, style, e);
+  if (!e.changed) {
+    write_unchanged(text, b, fx);
+    return;
+  }
+  e.edit.insert = e.insert;
+  emit(nc::apply_edit(b, e.edit));
+  ++report_.lines_changed;
+  // (The controller is back where it stood: emitted_mm_ stays.)
 }
 
 }  // namespace volmap::post

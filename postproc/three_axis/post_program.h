@@ -89,6 +89,7 @@ struct PostReport {
     int line;
     double deviation_mm;
     std::string file;
+    bool rigid_tap = false;  ///< a G33.1 tap (it cannot be split or written out)
   };
   static constexpr std::size_t kMaxCycleWarnings = 1000;
   std::vector<CycleWarning> cycle_warnings;

@@ -42,9 +42,15 @@ std::string post_summary_text(const PostSummaryInfo& info, const PostReport& r) 
   for (std::size_t k = 0; k < r.cycle_warnings.size() && k < kCycleWarningsShown; ++k) {
     const PostReport::CycleWarning& w = r.cycle_warnings[k];
     s += fmt::format(
-        "warning: {}: the canned cycle's feed into the hole, which the controller computes, is "
-        "predicted {:.2f} µm off the hole's axis (tolerance {:g} µm); --expand-cycles writes "
-        "it out as moves that keep the tolerance\n",
+        fmt::runtime(
+            w.rigid_tap
+                ? "warning: {}: the rigid tap (G33.1) runs on a line the controller computes, "
+                  "predicted {:.2f} µm off the nominal one (tolerance {:g} µm); a tap cannot be "
+                  "split: its end is corrected, the line between is the controller's\n"
+                : "warning: {}: the canned cycle's feed into the hole, which the controller "
+                  "computes, "
+                  "is predicted {:.2f} µm off the hole's axis (tolerance {:g} µm); --expand-cycles "
+                  "writes it out as moves that keep the tolerance\n"),
         where(info, w.file, w.line), w.deviation_mm * 1e3, info.tolerance_um);
   }
   if (r.cycle_warning_count > kCycleWarningsShown)

@@ -78,6 +78,8 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
     // the block's axis words were the point on the way.
     for (int a = 0; a < 3; ++a)
       if (fx.homed_axes & (1u << a)) emitted_mm_[a] = interp_.state().position_mm[a];
+  } else if (fx.has_motion && fx.motion.kind == nc::MotionKind::kTap) {
+    // A rigid tap comes back to where the controller stood.
   } else if (fx.has_motion) {
     if (!emitted_known_ || fx.motion.kind == nc::MotionKind::kCycle) {
       emitted_mm_ = interp_.state().position_mm;
@@ -171,6 +173,10 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
   }
   if (m.kind == nc::MotionKind::kRapid || m.kind == nc::MotionKind::kCycle) {
     positioning_line(text, b, fx, c, style);
+    return;
+  }
+  if (m.kind == nc::MotionKind::kTap) {
+    tap_line(text, b, fx, c, style);
     return;
   }
   // Feed moves: lines, arcs and helices.

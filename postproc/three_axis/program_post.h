@@ -123,6 +123,10 @@ class ProgramPost {
   /// goes into the report's cycle_warnings (--expand-cycles writes it out).
   void check_cycle_feed(const Corrector& c, const nc::Motion& hole, const Vector3d& bottom_cmd,
                         double r_cmd_mm, const ApproachDirections& d);
+  /// G33.1, a rigid tap: its end corrected, the line there and back
+  /// checked (it cannot be split), the controller back at its start.
+  void tap_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
+                const Corrector& c, const BlockStyle& style);
   /// A rapid, or a canned-cycle block of one hole in G90 (positioning_move.cc).
   void positioning_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
                         const Corrector& c, const BlockStyle& style);

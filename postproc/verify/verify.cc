@@ -59,6 +59,14 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
       if (interp.state().position_known) out.push_back({m, L, number, false});
       continue;
     }
+    if (m.kind == nc::MotionKind::kTap) {  // G33.1: in and back out, both cutting
+      out.push_back({m, L, number, true});
+      nc::Motion back = m;
+      back.start_mm = m.end_mm;
+      back.end_mm = m.start_mm;
+      out.push_back({back, L, number, true});
+      continue;
+    }
     if (m.kind == nc::MotionKind::kCycle) {
       // Every hole (L repeats): rapid over it, down to R, then the feed to
       // the bottom and back to the clearance level.

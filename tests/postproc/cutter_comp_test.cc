@@ -50,31 +50,6 @@ std::string write_program(const std::string& name, const std::string& text) {
   return path;
 }
 
-// The sample's errors without X's lost motion (its + direction only): the
-// post takes up play with short steps, which compensation refuses.
-std::string errors_without_lost_motion() {
-  const std::string path = (dir() / "hsu-one-direction.csv").string();
-  std::ifstream in(test::source_path("samples/errors/hsu-3axis.csv"));
-  std::ofstream out(path);
-  bool x_block = false;
-  for (std::string l; std::getline(in, l);) {
-    if (l.rfind("X,dir,", 0) == 0) {
-      x_block = true;
-      out << "X," << l.substr(6) << "\n";
-      continue;
-    }
-    if (x_block && (l.empty() || !(std::isdigit(static_cast<unsigned char>(l[0])) || l[0] == '-')))
-      x_block = false;
-    if (!x_block) {
-      out << l << "\n";
-      continue;
-    }
-    const size_t c1 = l.find(','), c2 = l.find(',', c1 + 1);
-    if (l.substr(c1 + 1, c2 - c1 - 1) == "+1") out << l.substr(0, c1) << l.substr(c2) << "\n";
-  }
-  return path;
-}
-
 struct Kept {
   const char* name;
   const char* text;
@@ -107,7 +82,7 @@ TEST(CutterCompensation, KeptCompensationPutsTheToolCentreWithinToleranceAsRs274
   const auto [inch, mm] = diameter_tables();
   const std::string machine = test::source_path("samples/machines/hsu-3axis.json");
   const Machine m = load_machine_json(machine);
-  const std::string errors = errors_without_lost_motion();
+  const std::string errors = errors_without_lost_motion(dir());
   const ErrorSet e = load_errors_csv(errors);
   const post::Corrector c(m, e, m.tool_length_mm, OutsidePolicy::kError);
   const Eigen::Vector3d wo(100, 100, 100);

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -242,6 +243,31 @@ inline std::pair<std::string, std::string> tool_tables(const fs::path& dir,
     fm << fmt::format("T{0} P{0} Z{1} ;\n", tool, z * 25.4);
   }
   return {inch, mm};
+}
+
+// The sample's errors (hsu-3axis.csv) without X's lost motion (its +
+// direction only), written into dir: for tests whose check needs no play.
+inline std::string errors_without_lost_motion(const fs::path& dir) {
+  const std::string path = (dir / "hsu-one-direction.csv").string();
+  std::ifstream in(test::source_path("samples/errors/hsu-3axis.csv"));
+  std::ofstream out(path);
+  bool x_block = false;
+  for (std::string l; std::getline(in, l);) {
+    if (l.rfind("X,dir,", 0) == 0) {
+      x_block = true;
+      out << "X," << l.substr(6) << "\n";
+      continue;
+    }
+    if (x_block && (l.empty() || !(std::isdigit(static_cast<unsigned char>(l[0])) || l[0] == '-')))
+      x_block = false;
+    if (!x_block) {
+      out << l << "\n";
+      continue;
+    }
+    const size_t c1 = l.find(','), c2 = l.find(',', c1 + 1);
+    if (l.substr(c1 + 1, c2 - c1 - 1) == "+1") out << l.substr(0, c1) << l.substr(c2) << "\n";
+  }
+  return path;
 }
 
 }  // namespace volmap
