@@ -220,6 +220,9 @@ std::string transcription_sheet(const VolumetricTable& t, double unit, std::int6
              "data screen (or with FOCAS cnc_wrvolc) in the control's point order.\n"
              "# c*: correction added to the axis (commanded minus nominal), detection units of "
              "{:g} mm; data range -128..127 ({} values outside it)\n"
+             "# Not confirmed by a FANUC source, check on the control: the parameters that set "
+             "the lattice (origin, intervals, point counts) and its point numbering (FOCAS: "
+             "1..15625)\n"
              "i,j,k,x_mm,y_mm,z_mm,cx,cy,cz\n",
              t.machine_name, t.errors_source, unit, *outside) +
          body;

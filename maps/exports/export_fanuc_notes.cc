@@ -65,7 +65,9 @@ std::string fanuc_notes(const VolumetricTable& t, const std::vector<std::int64_t
       "emergency stop with parameter write enabled):\n"
       "  3605#0 bidirectional pitch error compensation (BDPx){}\n"
       "  3620 point of the reference position; 3621 / 3622 first / last point (positive\n"
-      "  direction); 3621 = 3620 - (travel below the reference / interval) + 1\n"
+      "  direction); 3621 = 3620 - (travel below the reference / interval) + 1, except with\n"
+      "  the reference at the travel start: 3621 = 3620 (the reference point's own zero\n"
+      "  section, as in FANUC's rotary example)\n"
       "  3623 magnification; 3624 interval ({}); 3626 first point of the negative direction\n"
       "  (3000 + 3621); 3627 absolute compensation at the reference position when it is\n"
       "  approached against the reference return direction (detection units)\n"
@@ -82,7 +84,10 @@ std::string fanuc_notes(const VolumetricTable& t, const std::vector<std::int64_t
         "\nfanuc_3d_transcription.csv: the correction vector at every grid vertex (mean of the\n"
         "approach directions), detection units, for the three-dimensional error compensation\n"
         "data screen; the control interpolates it trilinearly in each cell. A sheet to\n"
-        "transcribe, not a file the control loads.{}\n",
+        "transcribe, not a file the control loads.{}\n"
+        "Not confirmed by a FANUC source: the parameters that set the lattice (origin,\n"
+        "intervals, point counts) and the control's point numbering (FOCAS numbers them\n"
+        "1..15625); check them in the control's 3-D error compensation documentation.\n",
         outside > 0 ? fmt::format(" {} values lie outside -128..127 and cannot be entered as "
                                   "they are.",
                                   outside)
@@ -90,7 +95,9 @@ std::string fanuc_notes(const VolumetricTable& t, const std::vector<std::int64_t
   notes +=
       "\nNot confirmed by a FANUC source, check on the control before use: the pitch data\n"
       "record (N10000 + point, Q1 on the 30i series), 3624's unit, 3627's unit and sign, the\n"
-      "magnification range 1..100, and the sign of the compensation (commanded minus nominal).\n"
+      "magnification range 1..100, the sign of the compensation (commanded minus nominal),\n"
+      "and the load procedure (emergency stop, parameter write enabled, input from the memory\n"
+      "card or RS-232 on the parameter screen): follow the machine's manual.\n"
       "Run the axis to a few points with a laser after loading.\n";
   return notes;
 }

@@ -169,10 +169,16 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
       "Layout: TNC tables, CRLF line ends; a column starts where its name starts in the header\n"
       "row, values are left-aligned in it (as the TNC's own tables and pyLSV2's reader have\n"
       "them). Enter VOLMAP.CMA and the .COM tables as the machine's documentation says for\n"
-      "nonlinear axis error compensation (MP730 / the axis's compensation setting).\n"
+      "nonlinear axis error compensation (MP730 on the TNC 4xx; the setting on newer controls\n"
+      "is not confirmed).\n"
       "Not confirmed by a HEIDENHAIN source, check on the control before use: the sign of the\n"
-      "<K>.COM values (error, as MP720's linear compensation takes it), the points a table may\n"
-      "have on an iTNC 530 / TNC 6x0 (256 on the TNC 4xx), and the unit of the KC_*.COM angles.\n",
+      "<K>.COM values (error, as MP720's linear compensation takes it); the points a table may\n"
+      "have on an iTNC 530 / TNC 6x0 (256 on the TNC 4xx); the NR column (volmap numbers the\n"
+      "points from 0); what the control applies outside a table's AXISPOS range; the unit of\n"
+      "the KC_*.COM angles and the syntax of a COMPTAB cell; and which controls (TNC 640/620,\n"
+      "iTNC 530, MANUALplus) read this .COM layout at all: the column layout is taken from\n"
+      "TNC tool and pallet tables, not from .COM files. Open each table in the control's table\n"
+      "editor and check its columns before activating it.\n",
       t.machine_name, t.errors_source);
   const std::vector<std::int64_t> home = home_line_nodes(t, o);
 

@@ -150,10 +150,30 @@ struct SinumerikRun {
   }
 };
 
-SinumerikRun sinumerik(const VolumetricTable& t, const ExportOptions& o) {
+// The CEC file as an export with a defect would write it: every table
+// value negated (the sign of LEC), or without the SD41300 enables.
+enum class CecDefect { kNone, kSignFlipped, kNoEnable };
+
+std::string with_defect(const std::string& cec, CecDefect d) {
+  std::string out;
+  for (const std::string& line : lines_of(cec)) {
+    if (d == CecDefect::kNoEnable && line.rfind("$SN_CEC_TABLE_ENABLE[", 0) == 0) continue;
+    const size_t eq = line.find('=');
+    if (d == CecDefect::kSignFlipped && line.rfind("$AN_CEC[", 0) == 0)
+      out += line.substr(0, eq + 1) +
+             (line[eq + 1] == '-' ? line.substr(eq + 2) : "-" + line.substr(eq + 1)) + "\n";
+    else
+      out += line + "\n";
+  }
+  return out;
+}
+
+SinumerikRun sinumerik(const VolumetricTable& t, const ExportOptions& o,
+                       CecDefect defect = CecDefect::kNone) {
   const std::string lec_text = export_table(t, "siemens-lec", o)[0].text;
+  const std::string cec_text = export_table(t, "siemens-cec", o)[0].text;
   return {read_siemens_lec(read_siemens_ini(lec_text)),
-          read_siemens_cec(read_siemens_ini(export_table(t, "siemens-cec", o)[0].text)),
+          read_siemens_cec(read_siemens_ini(with_defect(cec_text, defect))),
           lec_reference_errors(lec_text)};
 }
 
@@ -193,6 +213,16 @@ TEST(ControllerModelSinumerik, LecAndCecPutTheTipOnTheHomeLinesUpToTheReferenceP
                                     worst_interpolation_cost(small_model(), -1, home)) +
                        4e-6;
   EXPECT_LE(sinumerik_worst(small_model(), run, points), bound);
+  // The check can fail: CEC with LEC's sign doubles the cross errors, and
+  // without SD41300 the tables are loaded but leave them (both far above
+  // the bound).
+  const double flipped =
+      sinumerik_worst(small_model(), sinumerik(small_table(), o, CecDefect::kSignFlipped), points);
+  const double no_enable =
+      sinumerik_worst(small_model(), sinumerik(small_table(), o, CecDefect::kNoEnable), points);
+  EXPECT_GT(flipped, 0.005);            // seen: 7.7 um against a bound of 0.5 um
+  EXPECT_GT(no_enable, 0.003);          // seen: 3.8 um
+  EXPECT_GT(flipped, 1.5 * no_enable);  // the wrong sign doubles what is left
 }
 
 TEST(ControllerModelSinumerik, LecAndCecAddUpOverTheVolumeOfASeparableMachine) {
@@ -201,10 +231,19 @@ TEST(ControllerModelSinumerik, LecAndCecAddUpOverTheVolumeOfASeparableMachine) {
                                     worst_interpolation_cost(separable_model(), -1)) +
                        4e-6;
   EXPECT_LE(sinumerik_worst(separable_model(), run, volume_points()), bound);
-  // The check can fail: without CEC the straightness and squareness remain.
+  // The check can fail: without CEC, with CEC's sign flipped or without
+  // SD41300 the straightness and squareness remain (twice over when flipped).
   SinumerikRun lec_only = run;
   lec_only.cec.tables.clear();
   EXPECT_GT(sinumerik_worst(separable_model(), lec_only, volume_points()), 0.001);
+  const double flipped =
+      sinumerik_worst(separable_model(), sinumerik(separable_table(), {}, CecDefect::kSignFlipped),
+                      volume_points());
+  const double no_enable = sinumerik_worst(
+      separable_model(), sinumerik(separable_table(), {}, CecDefect::kNoEnable), volume_points());
+  EXPECT_GT(flipped, 0.005);    // seen: 9.2 um against a bound of 0.5 um
+  EXPECT_GT(no_enable, 0.003);  // seen: 4.7 um
+  EXPECT_GT(flipped, 1.5 * no_enable);
 }
 
 // ---- FANUC stored pitch error compensation and 3-D error compensation ----
