@@ -54,6 +54,11 @@ nlohmann::ordered_json summary_json(const post::PostSummaryInfo& info, const pos
       {"max_deviation_um", r.max_deviation_mm * 1e3},
       {"dialect", nc::dialect_name(r.read.dialect.dialect)},
       {"flattened", flattened},
+      {"cutter_compensation",
+       r.comp_moves == 0 ? nlohmann::ordered_json(nullptr)
+                         : nlohmann::ordered_json{{"moves", r.comp_moves},
+                                                  {"max_radius_mm", r.comp_radius_mm},
+                                                  {"max_bound_um", r.comp_bound_mm * 1e3}}},
       {"cycle_warning_count", r.cycle_warning_count},
       {"cycle_warnings", warnings}};
 }

@@ -39,6 +39,13 @@ std::string post_summary_text(const PostSummaryInfo& info, const PostReport& r) 
         r.lines_added, r.arcs_kept, r.arcs_split, r.arcs_linearized, r.max_correction_mm * 1e3,
         r.max_deviation_mm * 1e3, info.tolerance_um);
   }
+  if (r.comp_moves > 0)
+    s += fmt::format(
+        "post: {}: cutter compensation (G41/G42) kept over {}, tool radius up to {:g} mm: the "
+        "controller offsets the corrected contour, at most {:.3g} µm off (a quarter of the "
+        "tolerance at most; docs/post.md, Cutter compensation)\n",
+        info.program, plural(r.comp_moves, "move", "moves"), r.comp_radius_mm,
+        r.comp_bound_mm * 1e3);
   for (std::size_t k = 0; k < r.cycle_warnings.size() && k < kCycleWarningsShown; ++k) {
     const PostReport::CycleWarning& w = r.cycle_warnings[k];
     s += fmt::format(

@@ -123,11 +123,10 @@ class ProgramPost {
   /// goes into the report's cycle_warnings (--expand-cycles writes it out).
   void check_cycle_feed(const Corrector& c, const nc::Motion& hole, const Vector3d& bottom_cmd,
                         double r_cmd_mm, const ApproachDirections& d);
-  /// G33.1, a rigid tap: its end corrected, the line there and back
-  /// checked (it cannot be split), the controller back at its start.
+  /// G33.1, a rigid tap (its end corrected, there and back checked); a rapid, or a
+  /// canned-cycle block of one hole in G90 (positioning_move.cc).
   void tap_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
                 const Corrector& c, const BlockStyle& style);
-  /// A rapid, or a canned-cycle block of one hole in G90 (positioning_move.cc).
   void positioning_line(std::string_view text, const nc::Block& b, const nc::BlockEffect& fx,
                         const Corrector& c, const BlockStyle& style);
   /// The axis words of a positioning block, and whether any changed.
@@ -434,10 +433,9 @@ class ProgramPost {
     emitted_exact_ = !interp_.state().absolute;
   }
   bool emitted_known_ = false;
-  // Cutter compensation kept (cutter_comp.cc): the bound of the controller's
-  // offset of the corrected contour; the last move's end tangent (XY; zero:
-  // none), length (arc: radius), corner factor g (comp_bound.h); pieces kept
-  // to 3/4 of the tolerance; Z-only moves with X and Y held; the refusals.
+  // Cutter compensation kept (cutter_comp.cc): the bound of the controller's offset; the last
+  // move's end tangent (XY; 0: none), length (arc: radius), corner factor g (comp_bound.h);
+  // pieces kept to 3/4 of the tolerance; Z-only moves with X and Y held; the refusals.
   void check_compensation(const Corrector& c, const nc::BlockEffect& fx);
   void check_comp_pieces(const Corrector& c, double piece_lever_mm);
   void check_comp_bound(double bound_mm, const char* where, double g, double L);

@@ -44,6 +44,8 @@ inline void nc_reader(std::string_view program) {
     setup.work_offset_mm[1] = Eigen::Vector3d(-10, 5, 0);
     setup.tool_length_mm[1] = 50.0;
     setup.tool_length_mm[2] = 120.5;
+    setup.tool_diameter_mm[1] = 6.0;  // cutter compensation (G41 D1, D2: the side swapped)
+    setup.tool_diameter_mm[2] = -4.0;
     if (initial) setup.initial_position_mm = Eigen::Vector3d(0, 0, 300);
     nc::Interpreter interp(setup, "fuzz.ngc");
     nc::BlockEffect fx;
@@ -94,6 +96,7 @@ inline void nc_flatten_as(std::string_view program, nc::Dialect dialect) {
   setup.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
   setup.initial_position_mm = Eigen::Vector3d(250, 200, 300);
   setup.tool_length_mm[1] = 50.0;
+  setup.tool_diameter_mm[1] = 6.0;
   nc::Interpreter interp(setup, "fuzz.ngc");
   std::istringstream in{std::string(program)};
   nc::ProgramReader reader(in, "fuzz.ngc", interp, {});
@@ -136,6 +139,10 @@ inline void post(std::string_view input) {
   nc::ProgramSetup setup;
   setup.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
   setup.tool_length_mm[1] = 12.5;
+  // Cutters small enough that compensation is kept at 1 um on the sample
+  // (2 r L = 0.12 um), the second with its side swapped.
+  setup.tool_diameter_mm[1] = 0.2;
+  setup.tool_diameter_mm[2] = -0.1;
   setup.initial_position_mm = Eigen::Vector3d(250, 200, 150);
   std::string out[2], error[2];
   post::PostReport report[2];

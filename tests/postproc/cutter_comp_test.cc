@@ -104,6 +104,9 @@ TEST(CutterCompensation, KeptCompensationPutsTheToolCentreWithinToleranceAsRs274
             "--tool-table {} {} -o {} 2>{}.log",
             machine, errors, kToleranceUm, mm, in, out, out);
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << test::file_bytes(out + ".log");
+    // The codes are kept, and stderr says so with the bound.
+    EXPECT_NE(test::file_bytes(out + ".log").find("cutter compensation (G41/G42) kept over"),
+              std::string::npos);
     // The codes are kept: the controller offsets the corrected contour.
     const std::string written = test::file_bytes(out);
     EXPECT_NE(written.find("G4"), std::string::npos);
