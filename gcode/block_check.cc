@@ -281,7 +281,10 @@ bool BlockCheck::motion_in_block(bool any_axis) {
                                  : word('Z'))
                   : nullptr,
          "axis words without a motion mode (G80 active); add G0 or G1");
-  if (!motion_here && (word('I') || word('J') || word('K') || word('R')) && !is_cycle(s_.motion))
+  // (G10's R is its own: a rotation with L2, a tool's radius with L1.)
+  const bool g10 = g[kNonModal] && g[kNonModal]->code10 == kG10SetOffsets;
+  if (!motion_here && (word('I') || word('J') || word('K') || (word('R') && !g10)) &&
+      !is_cycle(s_.motion))
     fail(word('I')   ? word('I')
          : word('J') ? word('J')
          : word('K') ? word('K')

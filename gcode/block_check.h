@@ -48,6 +48,8 @@ class BlockCheck {
   void home(int code10);
   /// G10 L2/L20 and G92 G92.1 G92.2 G92.3: offsets.cc.
   void offsets(int code10);
+  /// G10 L1: a row of the tool table (offsets.cc), into effect_.tool_row.
+  void tool_table_row();
   /// What Fanuc's offsets refuse (offsets.cc).
   void fanuc_offsets(int code10);
   /// Whether the block moves, and the refusals of words that need a motion.

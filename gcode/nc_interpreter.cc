@@ -70,6 +70,7 @@ State Interpreter::check(const Block& b, BlockEffect& effect) const {
   effect.stop_code = false;
   effect.motion_code = -1;
   effect.comp_role = CompRole::kNone;
+  effect.tool_row = ToolTableWrite{};
   effect.more_holes.clear();
   effect.homed_axes = 0;
   effect.stores_home = false;
@@ -85,6 +86,10 @@ State Interpreter::check(const Block& b, BlockEffect& effect) const {
 
 void Interpreter::execute(const Block& b, BlockEffect& effect) {
   s_ = check(b, effect);  // step 4: only a block that passed changes the state
+  if (const ToolTableWrite& row = effect.tool_row; row.tool >= 0) {
+    if (row.length_mm) setup_.tool_length_mm[row.tool] = *row.length_mm;
+    if (row.diameter_mm) setup_.tool_diameter_mm[row.tool] = *row.diameter_mm;
+  }
 }
 
 }  // namespace volmap::nc

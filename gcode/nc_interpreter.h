@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -164,6 +165,13 @@ struct State {
   friend bool operator==(const State&, const State&) = default;
 };
 
+/// A row of the tool table a block sets (G10 L1): the tool, and the length
+/// offset and diameter given (mm).
+struct ToolTableWrite {
+  int tool = -1;  ///< -1: none
+  std::optional<double> length_mm, diameter_mm;
+};
+
 /// What one block did, for the post-processor: its motion (at most one), and
 /// for every axis word the machine coordinate it names.
 struct BlockEffect {
@@ -173,6 +181,7 @@ struct BlockEffect {
   bool stop_code = false;                ///< M0 M1 M2 M30 M60 in the block
   int motion_code = -1;                  ///< motion G code written in this block, x10, or -1
   CompRole comp_role = CompRole::kNone;  ///< the motion's, in cutter compensation
+  ToolTableWrite tool_row;               ///< G10 L1 (execute() writes it into the table)
   /// G92 or G10 L20 with axis words: offsets set from where the tool
   /// stands, which on the machine is where the post's command put it.
   bool offsets_from_position = false;

@@ -11,7 +11,12 @@
 //  - G52 X Y Z: the same offset (LinuxCNC keeps both in #5211-#5213), set
 //    to the values given (program units, absolute under G91 too); the axes
 //    not named keep the offset in effect (zero while suspended); applied.
-// Tool table rows (G10 L1 L10 L11) are refused: give a tool table.
+//  - G10 L1 P<tool> Z R: the tool table's row of that tool gets the length
+//    offset Z and the radius R (program units; the diameter is 2 R), as
+//    rs274 sets them (SET_TOOL_TABLE_ENTRY): an offset in effect stays
+//    until the next G43. X Y (a lathe's offsets), I J Q (its angles and
+//    orientation) are refused, and so are L10 L11 (rows set from where the
+//    tool stands: touch-off, not a CAM program's).
 // Fanuc (Series 0i-MF operator's manual, B-64604EN): G10 L2 P1-P6 sets G54-
 // G59, and under G91 adds to the offset; P0 (the external offset), L20
 // (the additional systems G54.1 P..), G52 under G91, G92.2/G92.3 and G52
@@ -43,10 +48,15 @@ void BlockCheck::offsets(int code10) {
   if (code10 == kG10SetOffsets) {
     const Word* l = word('L');
     const Word* p = word('P');
+    if (l && l->value == 1 && !fanuc()) {
+      tool_table_row();
+      return;
+    }
     if (!l || (l->value != 2 && l->value != 20))
       fail(l ? l : self,
-           "G10 sets work offsets with L2 or L20 here; tool table rows (L1 L10 "
-           "L11) are not supported: give them with `tool_table`");
+           "G10 sets work offsets with L2 or L20 and tool table rows with L1 here; rows set "
+           "from where the tool stands (L10 L11) are not supported: give them with "
+           "`tool_table`");
     if (!p || p->value != std::floor(p->value) || p->value < 0 || p->value > 9)
       fail(p ? p : self, "G10 needs P0 (the active system) to P9 (G59.3)");
     if (const Word* r = word('R'); r && r->value != 0.0)
@@ -125,6 +135,29 @@ void BlockCheck::fanuc_offsets(int code10) {
          "G52 and G92 in one program: a Fanuc control keeps them apart (G92 cancels the "
          "local offset), volmap as one shift; use one of them");
   if (shift != 0) s_.fanuc_shift = shift;
+}
+
+void BlockCheck::tool_table_row() {
+  const Word* self = g[kNonModal];
+  const Word* p = word('P');
+  // LinuxCNC: P a tool of the table (rs274: "P value out of range with G10
+  // L1", "Requested tool 9 not found in the tool table").
+  if (!p || p->value != std::floor(p->value) || p->value < 0 || p->value > kMaxToolNumber)
+    fail(p ? p : self, "G10 L1 needs P, a tool number (P value out of range with G10 L1)");
+  const int tool = static_cast<int>(p->value);
+  if (!setup_.tool_length_mm.contains(tool))
+    fail(p, fmt::format("G10 L1 sets tool {}, which the tool table does not list (LinuxCNC "
+                        "refuses it); give the tool in `tool_table`",
+                        tool));
+  for (char L : {'X', 'Y', 'I', 'J', 'Q'})
+    if (const Word* w = word(L); w && w->value != 0.0)
+      fail(w, fmt::format("G10 L1 {}: a lathe tool's offset or angle; the post reads a mill's "
+                          "length offset Z and radius R only",
+                          L));
+  ToolTableWrite& row = effect_.tool_row;
+  row.tool = tool;
+  if (const Word* z = word('Z')) row.length_mm = z->value * s_.unit_mm;
+  if (const Word* r = word('R')) row.diameter_mm = 2 * r->value * s_.unit_mm;
 }
 
 }  // namespace volmap::nc

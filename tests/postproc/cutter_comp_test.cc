@@ -72,6 +72,9 @@ const Kept kKept[] = {
     {"negative-diameter.ngc",
      "G21 G90\nT3 M6\nG0 X-10 Y0 Z3\nG1 Z-1 F200\nG42 D3 X0 Y0\nX40 Y5\nX60 Y30\nG1 Z-1.5\n"
      "X20 Y50\nG0 Z2\nX0 Y0\nG1 Z-1\nX10 Y-5\nG40 X-10 Y0\nG0 Z3\nM2\n"},
+    {"g10-l1-radius.ngc",
+     "G21 G90\nG10 L1 P2 R2.5 Z0\nT2 M6\nG0 X-10 Y-10 Z3\nG1 Z-1 F300\nG41 D2 X0 Y0\n"
+     "X30\nG2 X40 Y-10 R10\nG1 X60\nG40 X70 Y-20\nG0 Z3\nM2\n"},
     {"long-sides.ngc",
      "G21 G90\nT1 M6\nG0 X0 Y-10 Z5\nG1 Z0 F500\nG41 D1 X0 Y0\nX250 Y3\nY180\nX0 Y176\nY0\n"
      "G40 G1 X0 Y-10\nM2\n"},

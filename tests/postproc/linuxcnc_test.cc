@@ -161,16 +161,17 @@ TEST(LinuxCnc, ToolLengthOffsetsMoveTheControlledPointAsRs274Does) {
   const auto [tbl_inch, tbl_mm] = tool_tables(dir, {1.0, -0.5});
   const std::string program =
       "G21 G90 G17 F100\nG0 X0 Y0 Z50\nG43 H1\nG91 G1 Z-5\nT2 M6\nG43 H2\nG1 X2 Z-5\nG49\nG1 Z-5\n"
-      "G43.1 Z10\nG1 Y3 Z-5\nG90 G1 X10 Z0\nM2\n";
+      "G43.1 Z10\nG1 Y3 Z-5\nG90 G1 X10 Z0\nG10 L1 P1 Z20\nG43 H1\nG91 G1 Z-5\nG90\nM2\n";
   const std::string in = (dir / "tlo.ngc").string(), out = (dir / "tlo-post.ngc").string();
   std::ofstream(in, std::ios::binary) << program;
   const Canon rs = canonical(in, tbl_inch);
   ASSERT_TRUE(rs.ok) << rs.errors;
   // By hand: 50 - 25.4 - 5 = 19.6; + 25.4 + 12.7 - 5 = 52.7; - 12.7 - 5 =
-  // 35; - 10 - 5 = 20; then Z0.
-  const double want[] = {19.6, 52.7, 35.0, 20.0, 0.0};
-  ASSERT_EQ(rs.feeds.size(), 5u);
-  for (size_t k = 0; k < 5; ++k)
+  // 35; - 10 - 5 = 20; then Z0; G10 L1 makes tool 1's offset 20 mm (the one
+  // in effect, G43.1's 10, stays), G43 H1 applies it: 0 - (20 - 10) - 5.
+  const double want[] = {19.6, 52.7, 35.0, 20.0, 0.0, -15.0};
+  ASSERT_EQ(rs.feeds.size(), 6u);
+  for (size_t k = 0; k < 6; ++k)
     EXPECT_NEAR(rs.feeds[k].end_mm.z(), want[k], 1e-4) << "rs274, feed " << k;
   // volmap's interpreter, work offset zero.
   nc::ProgramSetup setup;
@@ -185,8 +186,8 @@ TEST(LinuxCnc, ToolLengthOffsetsMoveTheControlledPointAsRs274Does) {
     if (fx.has_motion && fx.motion.kind == nc::MotionKind::kLinear)
       feeds_z.push_back(fx.motion.end_mm.z());
   }
-  ASSERT_EQ(feeds_z.size(), 5u);
-  for (size_t k = 0; k < 5; ++k) EXPECT_NEAR(feeds_z[k], want[k], 1e-9) << "volmap, feed " << k;
+  ASSERT_EQ(feeds_z.size(), 6u);
+  for (size_t k = 0; k < 6; ++k) EXPECT_NEAR(feeds_z[k], want[k], 1e-9) << "volmap, feed " << k;
   // The post of it, run by rs274: the same points, moved by the correction.
   const std::string cmd = hsu_post_command("--work-offset 250,200,150 --tool-table " + tbl_mm +
                                            " " + in + " -o " + out);
