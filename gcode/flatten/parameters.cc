@@ -68,7 +68,25 @@ std::optional<double> Parameters::system(int n) const {
     return std::nullopt;  // the stored value (a .var file's, or 0)
   }
   if (n == 5400) return current_tool(s);
-  if (n >= 5401 && n <= 5409) return n == 5403 ? s.tool_length_mm : 0.0;
+  if (n >= 5401 && n <= 5410) {
+    // The loaded tool's row of the tool table (rs274: its Z and diameter as
+    // the table gives them, whatever G43 applies; other columns zero here).
+    if (!s.tool_loaded)
+      throw ValueError{fmt::format(
+          "#{} before any M6 reads the tool the machine holds when the program starts, known "
+          "only at run time; load the tool with M6 first",
+          n)};
+    const int tool = static_cast<int>(current_tool(s));
+    const auto& table =
+        n == 5410 ? interp_.setup().tool_diameter_mm : interp_.setup().tool_length_mm;
+    const auto it = table.find(tool);
+    return (n == 5403 || n == 5410) && it != table.end() ? it->second : 0.0;
+  }
+  if (n >= 5420 && n <= 5428 && s.comp_side != 0)
+    throw ValueError{
+        fmt::format("#{} (the current position) with cutter radius compensation on: "
+                    "LinuxCNC refuses to read it there",
+                    n)};
   if (n >= 5420 && n <= 5428) {
     const int a = n - 5420;
     if (a < 3) {

@@ -12,7 +12,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "core/model/errors_csv.h"
 #include "core/model/machine_json.h"
@@ -231,6 +233,44 @@ TEST(CutterCompensation, ABoundAboveAQuarterOfTheToleranceIsRefusedWithItsNumber
       std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// #5403 and #5410 are the loaded tool's table Z and diameter, whatever G43
+// applies (rs274 printed 0.5 and 0.1 for T1 of an inch table after
+// `G43 H2`); G10 L1 changes them; before any M6 they are the machine's.
+TEST(CutterCompensation, ToolTableParametersAreTheLoadedToolsRow) {
+  const auto [inch, mm] = diameter_tables();  // T1: D 3.175 Z0; T2: D 10 Z0
+  const std::string in =
+      write_program("params.ngc",
+                    "G21 G90\nT1 M6\nG0 X#5403 Y#5410 Z10\nG43 H2\nG0 X#5410\nG10 L1 P1 Z4 R2\n"
+                    "G0 X#5403 Y#5410\nM2\n");
+  const std::string out = (dir() / "params-out.ngc").string();
+  const std::string args =
+      fmt::format("post --machine {} --errors {} --work-offset 100,100,100 --tool-table {} ",
+                  test::source_path("samples/machines/hsu-3axis.json"),
+                  test::source_path("samples/errors/hsu-3axis.csv"), mm);
+  const test::CliResult r = test::run_volmap(args + in + " -o " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  // Written flat: the values, moved by the correction (some µm).
+  std::istringstream lines(test::file_bytes(out));
+  std::vector<std::pair<double, double>> xy;
+  for (std::string l; std::getline(lines, l);)
+    if (l.rfind("G0 X", 0) == 0)
+      xy.emplace_back(std::strtod(l.c_str() + 4, nullptr),
+                      l.find('Y') == std::string::npos
+                          ? 0.0
+                          : std::strtod(l.c_str() + l.find('Y') + 1, nullptr));
+  ASSERT_EQ(xy.size(), 3u) << test::file_bytes(out);
+  EXPECT_NEAR(xy[0].first, 0.0, 0.05);
+  EXPECT_NEAR(xy[0].second, 3.175, 0.05);
+  EXPECT_NEAR(xy[1].first, 3.175, 0.05);
+  EXPECT_NEAR(xy[2].first, 4.0, 0.05);
+  EXPECT_NEAR(xy[2].second, 4.0, 0.05);
+  const std::string early = write_program("params-early.ngc", "G21 G90\nG0 X#5403 Y0 Z10\nM2\n");
+  const test::CliResult e = test::run_volmap(args + early + " -o " + out + "-early");
+  EXPECT_EQ(e.status, 1);
+  EXPECT_NE(e.err.find("params-early.ngc:2"), std::string::npos) << e.err;
+  EXPECT_NE(e.err.find("#5403 before any M6"), std::string::npos) << e.err;
 }
 
 TEST(CutterCompensation, LostMotionTakenUpUnderCompensationIsRefused) {
