@@ -81,6 +81,9 @@ class BlockCheck {
   void refuse_while_compensating(bool before_step) const;
   /// The motion's part in cutter compensation (effect_.comp_role).
   void comp_role();
+  /// A straight side cut back by two inside corners: refused where the
+  /// tool cannot reach it, its slack into effect_ (cutter_comp.cc).
+  void comp_side_reach(CompRole role);
   // fanuc_rules.cc
   /// The Fanuc dialect's checks of the words (decimal points, G04's X).
   void fanuc_words();

@@ -114,6 +114,10 @@ void BlockCheck::rigid_tap(Motion& mo, const Eigen::Vector3d& target) const {
     fail(code, "spindle not turning in G33.1 (LinuxCNC refuses it): start it with M3 or M4");
   if (!s_.position_known)
     fail(code, "G33.1 from an unknown position: command X, Y and Z with a rapid (G0) first");
+  if (s_.comp_side != 0 && s_.comp_radius_mm > 0)
+    fail(code,
+         "G33.1 while cutter compensation is on (LinuxCNC refuses it: \"Bug code not g0 "
+         "or g1\"); give G40 first");
   mo.kind = MotionKind::kTap;
   mo.end_mm = target;
   mo.r_mm = mo.clear_mm = mo.start_mm.z();

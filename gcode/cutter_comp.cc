@@ -6,6 +6,7 @@
 // docs/post.md "Cutter compensation").
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "gcode/block_check.h"
@@ -35,6 +36,7 @@ void BlockCheck::cutter_comp() {
     // The next move leaves the offset path, if the compensation moved.
     s_.comp_exit_pending =
         (on_before && !s_.comp_entry_pending && s_.comp_radius_mm > 0) || s_.comp_exit_pending;
+    s_.comp_arc_not_allowed = s_.comp_arc_not_allowed || s_.comp_exit_pending;
     s_.comp_side = 0;
     s_.comp_entry_pending = false;
   }
@@ -93,6 +95,10 @@ double BlockCheck::comp_diameter_mm(const Word* code, const Word* d) const {
            "this program has not loaded with M6 here; give D (the tool number)");
     tool = s_.tool;
   }
+  if (setup_.tool_orientation.contains(tool))
+    fail(d ? d : code, fmt::format("G41/G42 with lathe tool {} (orientation {} in the tool table), "
+                                   "but plane is not G18; LinuxCNC refuses it",
+                                   tool, setup_.tool_orientation.at(tool)));
   const auto it = setup_.tool_diameter_mm.find(tool);
   if (it == setup_.tool_diameter_mm.end())
     fail(d ? d : code,
@@ -123,11 +129,12 @@ void BlockCheck::refuse_while_compensating(bool before_step) const {
         refuse(&w, "an override or I/O code (M48-M53, M62-M68)");
   } else {
     if (const Word* nm = g[kNonModal]; nm && nm->code10 != kG4Dwell)
-      refuse(nm, nm->code10 == kG53MachineCoordinates ? "G53"
-                 : nm->code10 == kG28Home || nm->code10 == kG30SecondHome ||
-                         nm->code10 == kG28_1StoreHome || nm->code10 == kG30_1StoreSecondHome
-                     ? "G28/G30"
-                     : "a change of offsets (G10, G52, G92)");
+      refuse(nm->code10 == kG53MachineCoordinates && s_.comp_radius_mm == 0 ? nullptr : nm,
+             nm->code10 == kG53MachineCoordinates ? "G53"
+             : nm->code10 == kG28Home || nm->code10 == kG30SecondHome ||
+                     nm->code10 == kG28_1StoreHome || nm->code10 == kG30_1StoreSecondHome
+                 ? "G28/G30"
+                 : "a change of offsets (G10, G52, G92)");
     refuse(g[kCoordSystem], "a coordinate system code (G54-G59.3)");
     refuse(g[kToolLength], "a change of tool length offset (G43, G49)");
     refuse(g[kPathControl], "a change of path control (G61, G64)");
@@ -155,10 +162,15 @@ void BlockCheck::comp_role() {
     role = CompRole::kExit;
     s_.comp_exit_pending = false;
   }
-  if (role == CompRole::kExit && arc)
+  if (arc && s_.comp_arc_not_allowed)
     fail(g[kMotion],
          "the move just after exiting cutter compensation mode must be straight, not an arc "
          "(LinuxCNC refuses it); add a straight move after G40");
+  if (!arc) s_.comp_arc_not_allowed = false;  // G0 G1 G33.1
+  if (role == CompRole::kExit && mo.kind == MotionKind::kTap)
+    fail(g[kMotion],
+         "a rigid tap (G33.1) as the move after G40: LinuxCNC taps from the offset "
+         "point, across; add a straight move after G40");
   if (role == CompRole::kEntry) {
     // LinuxCNC: the tool goes from where it stands to the offset of the
     // end, which must be further than the radius (a Z move alone too).
@@ -180,6 +192,53 @@ void BlockCheck::comp_role() {
                                    r, radius));
   }
   effect_.comp_role = role;
+  comp_side_reach(role);
+}
+
+void BlockCheck::comp_side_reach(CompRole role) {
+  // LinuxCNC cuts a straight side back at an inside corner (turn above
+  // 0.05 rad) by r tan(turn / 2) and refuses a side its two cuts reverse
+  // ("Straight feed in concave corner cannot be reached by the tool without
+  // gouging"). Arcs' corners and the entry's are not followed here.
+  const Motion& mo = effect_.motion;
+  const bool line = mo.kind != MotionKind::kArc;  // (a tap is refused under compensation)
+  const Eigen::Vector2d d(mo.end_mm.x() - mo.start_mm.x(), mo.end_mm.y() - mo.start_mm.y());
+  if (role != CompRole::kCompensated) {
+    s_.comp_side_dir.setZero();
+    return;
+  }
+  if (!line) {  // (a side into an arc is cut to the offset arc: not followed)
+    s_.comp_side_dir.setZero();
+    return;
+  }
+  if (d.isZero(0.0)) return;  // a move along Z: the side stays the last one
+  const Eigen::Vector2d t_out = d.normalized();
+  double trim = 0.0, rate = 0.0;
+  if (!s_.comp_side_dir.isZero(0.0)) {
+    const Eigen::Vector2d& t_in = s_.comp_side_dir;
+    const double cross = t_in.x() * t_out.y() - t_in.y() * t_out.x();
+    const double turn = std::atan2(std::abs(cross), std::clamp(t_in.dot(t_out), -1.0, 1.0));
+    const bool inside = s_.comp_side == 1 ? cross > 0 : cross < 0;
+    if (inside && turn > 0.05) {
+      const double r = s_.comp_radius_mm, c = std::cos(turn / 2);
+      trim = r * std::tan(turn / 2);
+      rate = r / (2 * c * c);
+      const double slack = s_.comp_side_len_mm - s_.comp_side_trim_mm - trim;
+      if (slack < 0)
+        fail(g[kMotion],
+             fmt::format("straight feed in concave corner cannot be reached by the tool without "
+                         "gouging (LinuxCNC refuses it): the side before this corner is {:g} mm, "
+                         "the tool needs {:g} mm of it",
+                         s_.comp_side_len_mm, s_.comp_side_trim_mm + trim));
+      effect_.comp_slack_mm = slack;
+      effect_.comp_slack_len_mm = s_.comp_side_len_mm;
+      effect_.comp_slack_rate = s_.comp_side_trim_rate + rate;
+    }
+  }
+  s_.comp_side_dir = t_out;
+  s_.comp_side_len_mm = d.norm();
+  s_.comp_side_trim_mm = trim;
+  s_.comp_side_trim_rate = rate;
 }
 
 }  // namespace volmap::nc

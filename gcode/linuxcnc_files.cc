@@ -50,7 +50,7 @@ void read_tool_table(const std::string& path, ProgramSetup& setup) {
     std::istringstream ls(line);
     std::string tok;
     int tool = -1;
-    std::optional<double> z, d;
+    std::optional<double> z, d, q;
     while (ls >> tok) {
       const char L = static_cast<char>(std::toupper(static_cast<unsigned char>(tok[0])));
       double v = 0;
@@ -75,10 +75,12 @@ void read_tool_table(const std::string& path, ProgramSetup& setup) {
       if (L == 'T') tool = static_cast<int>(v);
       if (L == 'Z') z = v;
       if (L == 'D') d = v;
+      if (L == 'Q') q = v;
     }
     if (tool < 0) return;
     setup.tool_length_mm[tool] = z.value_or(0.0);
     if (d) setup.tool_diameter_mm[tool] = *d;
+    if (q && *q != 0 && *q != 9) setup.tool_orientation[tool] = static_cast<int>(*q);
   });
 }
 

@@ -165,8 +165,16 @@ int m_group(int code10, const char** why) {
       *why = "M98/M99 subroutine calls are not supported; expand them in CAM";
       return -1;
     default:
+      if (code10 >= kM70SaveModalState && code10 <= kM73SaveAutorestore) {
+        // (M73 restores at a subroutine's return, which the flat output
+        // does not have; M72 restores modes, cutter compensation among them.)
+        *why =
+            "saving and restoring the modal state (M70-M73) is not supported: volmap writes "
+            "subroutines flat, and M72/M73 would restore modes it does not follow; set the "
+            "modes explicitly";
+        return -1;
+      }
       if ((code10 >= kM61SetToolNumber && code10 <= kM68AnalogOutput) ||
-          (code10 >= kM70SaveModalState && code10 <= kM73SaveAutorestore) ||
           (code10 >= kM100FirstUserCode && code10 <= kM199LastUserCode))
         return kMOther;
       *why = "unknown M code";

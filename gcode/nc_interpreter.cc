@@ -71,6 +71,7 @@ State Interpreter::check(const Block& b, BlockEffect& effect) const {
   effect.motion_code = -1;
   effect.comp_role = CompRole::kNone;
   effect.tool_row = ToolTableWrite{};
+  effect.comp_slack_mm = INFINITY;
   effect.more_holes.clear();
   effect.homed_axes = 0;
   effect.stores_home = false;

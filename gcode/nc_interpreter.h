@@ -124,6 +124,15 @@ struct State {
   /// The next move in the XY plane enters the compensation (after G41/G42)
   /// or leaves it (after G40 with compensation on).
   bool comp_entry_pending = false, comp_exit_pending = false;
+  /// LinuxCNC's arc_not_allowed: after G40 ends a compensation that moved,
+  /// an arc is refused until a straight move (G0 G1, G33.1) comes.
+  bool comp_arc_not_allowed = false;
+  /// The last compensated straight side (XY, its unit direction; zero:
+  /// none or an arc), its length and how much its start corner cut off it
+  /// (LinuxCNC trims a side at an inside corner by r tan(turn / 2)), and
+  /// how that cut changes with the turn (mm/rad).
+  Eigen::Vector2d comp_side_dir = Eigen::Vector2d::Zero();
+  double comp_side_len_mm = 0.0, comp_side_trim_mm = 0.0, comp_side_trim_rate = 0.0;
   /// Canned cycles return to the initial level (G98) or to R (G99).
   /// LinuxCNC's interpreter starts in G99 (its retract mode is zero,
   /// R_PLANE, until G98; rs274 shows it), not G98.
@@ -182,6 +191,11 @@ struct BlockEffect {
   int motion_code = -1;                  ///< motion G code written in this block, x10, or -1
   CompRole comp_role = CompRole::kNone;  ///< the motion's, in cutter compensation
   ToolTableWrite tool_row;               ///< G10 L1 (execute() writes it into the table)
+  /// An inside corner under compensation after a straight side: what is
+  /// left of the side after both corners' cuts (mm; infinite: no such
+  /// corner), the side's length, and how the cuts change with the turns
+  /// (mm/rad): the post checks its correction cannot use up what is left.
+  double comp_slack_mm = INFINITY, comp_slack_len_mm = 0.0, comp_slack_rate = 0.0;
   /// G92 or G10 L20 with axis words: offsets set from where the tool
   /// stands, which on the machine is where the post's command put it.
   bool offsets_from_position = false;

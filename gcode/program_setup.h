@@ -33,6 +33,9 @@ struct ProgramSetup {
   /// compensation (G41/G42 D). A Fanuc program's D offset number n reads
   /// the row T n.
   std::map<int, double> tool_diameter_mm;
+  /// Tool table: a lathe tool's orientation (a .tbl Q other than 0 or 9):
+  /// LinuxCNC refuses G41/G42 with it outside G18.
+  std::map<int, int> tool_orientation;
   /// Where the tool stands when the program starts (machine coordinates, mm),
   /// when known: lets a program that never commands an axis (a 2D plasma
   /// program without Z) be corrected. Unknown by default: then the first

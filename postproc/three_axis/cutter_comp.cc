@@ -41,12 +41,18 @@ void ProgramPost::check_compensation(const Corrector& c, const nc::BlockEffect& 
   const Eigen::Vector2d t_out = xy_tangent(m, false);
   const double lever = tangent_lever_mm(m);
   double g = 2.0, extra_mm = 0.0;
+  if (role == nc::CompRole::kEntry && m.kind == nc::MotionKind::kArc && comp_move_)
+    // LinuxCNC (convert_arc_comp1) builds a new arc through the start and
+    // the offset end, its centre on the line to the programmed one: how far
+    // the correction moves that arc is not bounded here.
+    throw InputError(*line_file_, current_line_,
+                     "an arc as the entry move of cutter compensation: the controller builds "
+                     "a new arc from the start, which volmap does not bound on a machine with "
+                     "errors; enter with a straight move");
   if (role == nc::CompRole::kEntry) {
-    // LinuxCNC enters along the tangent from the start to the circle of
-    // radius r round the end: its angle (sin a = r / d) turns by the
-    // relative error of the two ends over d, and by tan a more.
-    g = lever > r && m.kind != nc::MotionKind::kArc ? 2.0 + r / std::sqrt(lever * lever - r * r)
-                                                    : 2.0 + r / std::max(lever - r, 1e-300);
+    // LinuxCNC (convert_straight_comp1) ends the entry at the end offset
+    // square to the move: the end's offset, as on a smooth path.
+    g = 2.0;
   } else if (role == nc::CompRole::kCompensated) {
     g = comp_corner_factor(comp_tangent_in_, t_out, s.comp_side);
     // The turn the controller sees: the nominal one, moved by the
@@ -55,6 +61,20 @@ void ProgramPost::check_compensation(const Corrector& c, const nc::BlockEffect& 
     const double margin =
         2 * L + unit_mm / std::max(comp_lever_in_, 1e-300) + unit_mm / std::max(lever, 1e-300);
     extra_mm = comp_threshold_term_mm(comp_tangent_in_, t_out, s.comp_side, r, margin);
+    if (comp_move_ && std::isfinite(fx.comp_slack_mm)) {
+      // The side before this corner, cut back by both its inside corners,
+      // must stay reachable on the output: its length changes by at most
+      // L times it and the rounding, the cuts by their rate times the turn.
+      const double use_mm = L * fx.comp_slack_len_mm + 4 * unit_mm + fx.comp_slack_rate * margin;
+      if (fx.comp_slack_mm < use_mm)
+        throw InputError(*line_file_, current_line_,
+                         fmt::format("the side before this inside corner of cutter compensation "
+                                     "leaves the tool {:.3g} µm to spare, and the correction can "
+                                     "use up {:.3g} µm of it: LinuxCNC would refuse the output "
+                                     "(cannot be reached without gouging); lengthen the side or "
+                                     "use a smaller tool",
+                                     fx.comp_slack_mm * 1e3, use_mm * 1e3));
+    }
   }
   comp_factor_ = g;
   // The correction of a move along Z alone would move X and Y a little: a
@@ -98,6 +118,13 @@ void ProgramPost::check_comp_bound(double bound_mm, const char* where, double g,
   const double allowed_mm = options_.tolerance_mm / 4;
   if (bound_mm <= allowed_mm) return;
   const double r = interp_.state().comp_radius_mm;
+  if (!std::isfinite(bound_mm))
+    throw InputError(*line_file_, current_line_,
+                     fmt::format("{}cutter compensation (G41/G42, tool radius {:g} mm): the path "
+                                 "turns back on itself here, an inside corner where the "
+                                 "controller's offset has no bound; output the tool centre path "
+                                 "from CAM (G40)",
+                                 where, r));
   throw InputError(
       *line_file_, current_line_,
       fmt::format("{}cutter compensation (G41/G42, tool radius {:g} mm): the controller offsets "
@@ -106,7 +133,7 @@ void ProgramPost::check_comp_bound(double bound_mm, const char* where, double g,
                   "more than a quarter of the tolerance ({:g} µm); post with --tolerance-um "
                   "{:g} or more, or output the tool centre path from CAM (G40)",
                   where, r, bound_mm * 1e3, g, L, allowed_mm * 1e3,
-                  std::isfinite(bound_mm) ? std::ceil(bound_mm * 4e3 * 100) / 100 : INFINITY));
+                  std::ceil(bound_mm * 4e3 * 100) / 100));
 }
 
 double ProgramPost::comp_travel_margin_mm() const {
@@ -140,10 +167,11 @@ Vector3d ProgramPost::held_xy_command(const Corrector& c, const Vector3d& nomina
 
 void ProgramPost::refuse_comp_take_up() const {
   throw InputError(*line_file_, current_line_,
-                   "an axis with lost motion turns round here under cutter compensation: the "
-                   "post would take up its play with a short step, of which the controller "
-                   "would make a corner of the offset path; output the tool centre path from "
-                   "CAM (G40), or post with an errors file without lost motion");
+                   "an axis with lost motion turns round here under cutter compensation, and "
+                   "keeping the tolerance needs a short step that takes up its play, of which "
+                   "the controller would make a corner of the offset path; raise "
+                   "--tolerance-um (the play is then left within it), or output the tool "
+                   "centre path from CAM (G40)");
 }
 
 void ProgramPost::refuse_comp_split(const nc::BlockEffect& fx) const {
@@ -152,8 +180,7 @@ void ProgramPost::refuse_comp_split(const nc::BlockEffect& fx) const {
                    fmt::format("the {} move of cutter compensation ({}) needs more than one piece "
                                "to keep the tolerance on this machine, and a split would move "
                                "the controller's {} (it computes it from the move's start); "
-                               "make the move a shorter straight line, or raise "
-                               "--tolerance-um",
+                               "make the move shorter, or raise --tolerance-um",
                                entry ? "entry" : "exit",
                                entry ? "the first move after G41/G42" : "the first after G40",
                                entry ? "entry" : "exit"));

@@ -1,5 +1,7 @@
 #include "postproc/verify/verify.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <istream>
@@ -28,11 +30,42 @@ struct FeedMove {
                   ///< lost motion) but are not cutting
 };
 
+// Where a program's cutter compensation begins: its side (1 G41, 2 G42),
+// radius (mm) and line.
+struct CompStart {
+  int side;
+  double radius_mm;
+  int line;
+};
+
+// Refuses a compensated program whose compensation is not the nominal
+// one's (verify measures programmed contours: the offsets must agree).
+void check_same_compensation(const std::vector<CompStart>& nominal,
+                             const std::vector<CompStart>& compensated,
+                             const std::string& compensated_name) {
+  for (size_t k = 0; k < std::max(nominal.size(), compensated.size()); ++k) {
+    const bool same = k < nominal.size() && k < compensated.size() &&
+                      nominal[k].side == compensated[k].side &&
+                      std::abs(nominal[k].radius_mm - compensated[k].radius_mm) <= 1e-9;
+    if (same) continue;
+    auto what = [](const std::vector<CompStart>& v, size_t i) {
+      return i < v.size() ? fmt::format("G4{} with radius {:g} mm (line {})", v[i].side,
+                                        v[i].radius_mm, v[i].line)
+                          : std::string("none");
+    };
+    throw InputError(compensated_name, k < compensated.size() ? compensated[k].line : 0,
+                     fmt::format("cutter compensation {} differs from the nominal program's ({}): "
+                                 "verify compares programmed contours, which the controller "
+                                 "offsets; give the programs the same G41/G42 and tools",
+                                 what(compensated, k), what(nominal, k)));
+  }
+}
+
 // Feed moves of a program, as the interpreter sees them.
 std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
                                  const nc::ProgramSetup& setup, double default_tool_mm,
                                  const std::vector<std::string>& subroutine_path,
-                                 double& comp_radius_mm) {
+                                 double& comp_radius_mm, std::vector<CompStart>& comps) {
   nc::Interpreter interp(setup, name);
   nc::ProgramReader reader(in, name, interp, subroutine_path);
   std::vector<FeedMove> out;
@@ -51,6 +84,8 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
     if (!fx.has_motion) continue;
     if (fx.comp_role != nc::CompRole::kNone)
       comp_radius_mm = std::max(comp_radius_mm, interp.state().comp_radius_mm);
+    if (fx.comp_role == nc::CompRole::kEntry)
+      comps.push_back({interp.state().comp_side, interp.state().comp_radius_mm, number});
     // The machine file's tool (offset zero) plus the active tool length offset.
     const double L = default_tool_mm + interp.state().tool_length_mm;
     nc::Motion m = fx.motion;
@@ -204,11 +239,14 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
                              const Machine& machine, const ErrorSet& errors,
                              const nc::ProgramSetup& setup, const VerifyOptions& options) {
   VerifyResult r;
-  const std::vector<FeedMove> nom = feed_moves(nominal, nominal_name, setup, machine.tool_length_mm,
-                                               options.subroutine_path, r.comp_radius_mm);
+  std::vector<CompStart> nominal_comps, compensated_comps;
+  const std::vector<FeedMove> nom =
+      feed_moves(nominal, nominal_name, setup, machine.tool_length_mm, options.subroutine_path,
+                 r.comp_radius_mm, nominal_comps);
   const std::vector<FeedMove> out =
       feed_moves(compensated, compensated_name, setup, machine.tool_length_mm,
-                 options.subroutine_path, r.comp_radius_mm);
+                 options.subroutine_path, r.comp_radius_mm, compensated_comps);
+  check_same_compensation(nominal_comps, compensated_comps, compensated_name);
   Run run(machine, errors, options.outside);
   std::vector<FeedMove> nominal_path;
   for (const FeedMove& f : nom)

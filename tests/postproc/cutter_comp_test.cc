@@ -43,6 +43,8 @@ std::pair<std::string, std::string> diameter_tables() {
     fi << fmt::format("T{0} P{0} D{1:.9f} Z0 ;\n", tool, d / 25.4);
     fm << fmt::format("T{0} P{0} D{1} Z0 ;\n", tool, d);
   }
+  fi << "T4 P4 D0.1 Z0 Q2 ; a lathe tool\n";
+  fm << "T4 P4 D2.54 Z0 Q2 ; a lathe tool\n";
   return {inch, mm};
 }
 
@@ -179,6 +181,21 @@ const Refused kRefused[] = {
     {"G41 D1 X0 Y0\nX10\nG40\nG2 X20 Y0 R5\n", true, "must be straight"},
     {"G41 D1 X0 Y0\nX10\nG3 X11.5 Y1.5 R1.5\nG40 X-20\n", true, "not less than arc radius"},
     {"G41 D1 X0 Y0\nG92 X0\nG40 X-20\n", true, "a change of offsets"},
+    {"G41 D1 X0 Y0\nX10\nG40\nG42 D1\nG2 X20 Y-10 J-10\nG40 G1 X40\n", true, "must be straight"},
+    {"M3 S500\nG41 D1 X0 Y0\nX10\nG33.1 Z-5 K1\nG40 X-20\n", true,
+     "G33.1 while cutter compensation is on"},
+    {"G41 D4 X0 Y0\nG40 X-20\n", true, "lathe tool"},
+    {"G41 D1 X0 Y0\nX10\nY3\nX0\nG40 X-20\n", true, "cannot be reached by the tool"},
+    // volmap's own: M70-M73 (their restore is not followed), a tap as the
+    // exit (LinuxCNC taps across from the offset point), an arc as the
+    // entry on a machine with errors (its construction is not bounded).
+    {"M70\nG41 D1 X0 Y0\nX10\nG40 X-20\nM72\n", false, "M70-M73"},
+    {"M3 S500\nG41 D1 X0 Y0\nX10\nG40\nG33.1 X10 Y0 Z-5 K1\nG1 X-20\n", false,
+     "a rigid tap (G33.1) as the move after G40"},
+    {"G41 D1 G2 X10 Y-20 R15\nG40 G1 X-20\n", false, "an arc as the entry move"},
+    // A side that leaves the 1/8 in cutter 0.1 um to spare: the correction
+    // could make LinuxCNC refuse the output.
+    {"G41 D1 X0 Y0\nX10\nY3.1751\nX0\nG40 X-20\n", false, "to spare"},
     // volmap's own: another plane, and a program whose kept compensation
     // would leave the tolerance (1 um here, default).
     {"G18\nG41 D1 X0 Z0\nG40 X-20\n", false, "XY plane (G17) only"},
@@ -217,14 +234,13 @@ TEST(CutterCompensation, ABoundAboveAQuarterOfTheToleranceIsRefusedWithItsNumber
       test::source_path("samples/machines/hsu-3axis.json"),
       test::source_path("samples/errors/hsu-3axis.csv"), mm, in, out));
   EXPECT_EQ(r.status, 1);
-  // The entry (line 5): radius 1.5875 mm, g = 2 + r / sqrt(d^2 - r^2) with
-  // d the entry's 14.14 mm, and the sample's slope bound.
+  // The entry (line 5): radius 1.5875 mm, g = 2 (LinuxCNC ends it at the
+  // end's offset square to the move), and the sample's slope bound.
   const Machine m = load_machine_json(test::source_path("samples/machines/hsu-3axis.json"));
   const ErrorSet e = load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv"));
   const post::Corrector c(m, e, m.tool_length_mm, OutsidePolicy::kError);
-  const double radius = 3.175 / 2, d = std::sqrt(200.0);
-  const double g = 2 + radius / std::sqrt(d * d - radius * radius);
-  const double bound_um = g * radius * c.lipschitz_bound() * 1e3;
+  const double radius = 3.175 / 2;
+  const double bound_um = 2 * radius * c.lipschitz_bound() * 1e3;
   EXPECT_NE(r.err.find("bound.ngc:5: the entry move of cutter compensation"), std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find(fmt::format("up to {:.3g} µm off", bound_um)), std::string::npos) << r.err;
@@ -271,6 +287,26 @@ TEST(CutterCompensation, ToolTableParametersAreTheLoadedToolsRow) {
   EXPECT_EQ(e.status, 1);
   EXPECT_NE(e.err.find("params-early.ngc:2"), std::string::npos) << e.err;
   EXPECT_NE(e.err.find("#5403 before any M6"), std::string::npos) << e.err;
+}
+
+// verify compares programmed contours: a compensated program whose G41/G42
+// or tool differs from the nominal one's is refused, not measured.
+TEST(CutterCompensation, VerifyRefusesProgramsWhoseCompensationDiffers) {
+  const auto [inch, mm] = diameter_tables();
+  const std::string in = write_program("verify-in.ngc", kKept[0].text);
+  std::string edited = kKept[0].text;
+  edited.replace(edited.find("G41 D1"), 6, "G42 D1");
+  const std::string other = write_program("verify-other.ngc", edited);
+  const test::CliResult v = test::run_volmap(fmt::format(
+      "verify --machine {} --errors {} --work-offset 100,100,100 --tool-table {} --nominal {} "
+      "--program {}",
+      test::source_path("samples/machines/hsu-3axis.json"),
+      test::source_path("samples/errors/hsu-3axis.csv"), mm, in, other));
+  EXPECT_EQ(v.status, 1);
+  EXPECT_NE(v.err.find("verify-other.ngc:5: cutter compensation G42 with radius 1.5875 mm (line "
+                       "5) differs from the nominal program's (G41 with radius 1.5875 mm"),
+            std::string::npos)
+      << v.err;
 }
 
 TEST(CutterCompensation, LostMotionTakenUpUnderCompensationIsRefused) {
