@@ -166,7 +166,8 @@ void BlockCheck::comp_role() {
     fail(g[kMotion],
          "the move just after exiting cutter compensation mode must be straight, not an arc "
          "(LinuxCNC refuses it); add a straight move after G40");
-  if (!arc) s_.comp_arc_not_allowed = false;  // G0 G1 G33.1
+  if (mo.kind != MotionKind::kArc && mo.kind != MotionKind::kCycle)
+    s_.comp_arc_not_allowed = false;  // G0 G1 G33.1 (a cycle leaves it: rs274)
   if (role == CompRole::kExit && mo.kind == MotionKind::kTap)
     fail(g[kMotion],
          "a rigid tap (G33.1) as the move after G40: LinuxCNC taps from the offset "

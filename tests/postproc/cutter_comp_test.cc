@@ -182,6 +182,8 @@ const Refused kRefused[] = {
     {"G41 D1 X0 Y0\nX10\nG3 X11.5 Y1.5 R1.5\nG40 X-20\n", true, "not less than arc radius"},
     {"G41 D1 X0 Y0\nG92 X0\nG40 X-20\n", true, "a change of offsets"},
     {"G41 D1 X0 Y0\nX10\nG40\nG42 D1\nG2 X20 Y-10 J-10\nG40 G1 X40\n", true, "must be straight"},
+    {"G41 D1 X0 Y0\nX10\nG40\nG81 X20 Y0 Z-3 R1\nG80\nG2 X30 Y-10 J-10\n", true,
+     "must be straight"},
     {"M3 S500\nG41 D1 X0 Y0\nX10\nG33.1 Z-5 K1\nG40 X-20\n", true,
      "G33.1 while cutter compensation is on"},
     {"G41 D4 X0 Y0\nG40 X-20\n", true, "lathe tool"},
