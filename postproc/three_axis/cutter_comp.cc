@@ -56,10 +56,12 @@ void ProgramPost::check_compensation(const Corrector& c, const nc::BlockEffect& 
   } else if (role == nc::CompRole::kCompensated) {
     g = comp_corner_factor(comp_tangent_in_, t_out, s.comp_side);
     // The turn the controller sees: the nominal one, moved by the
-    // correction (at most L on each side) and by the output's rounding.
+    // correction (at most L on each side) and by the output's rounding
+    // (half a unit on each axis at both ends: up to 2 units across a move,
+    // over its lever).
     const double unit_mm = std::pow(10.0, -decimals()) * s.unit_mm;
-    const double margin =
-        2 * L + unit_mm / std::max(comp_lever_in_, 1e-300) + unit_mm / std::max(lever, 1e-300);
+    const double margin = 2 * L + 2 * unit_mm / std::max(comp_lever_in_, 1e-300) +
+                          2 * unit_mm / std::max(lever, 1e-300);
     extra_mm = comp_threshold_term_mm(comp_tangent_in_, t_out, s.comp_side, r, margin);
     if (comp_move_ && std::isfinite(fx.comp_slack_mm)) {
       // The side before this corner, cut back by both its inside corners,
