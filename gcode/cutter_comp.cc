@@ -11,6 +11,7 @@
 
 #include "gcode/block_check.h"
 #include "gcode/g_codes.h"
+#include "gcode/nc_path.h"
 
 namespace volmap::nc {
 
@@ -213,14 +214,12 @@ void BlockCheck::comp_side_reach(CompRole role) {
     return;
   }
   if (d.isZero(0.0)) return;  // a move along Z: the side stays the last one
-  const Eigen::Vector2d t_out = d.normalized();
+  const Eigen::Vector2d t_out = xy_tangent(mo, false);
   double trim = 0.0, rate = 0.0;
   if (!s_.comp_side_dir.isZero(0.0)) {
-    const Eigen::Vector2d& t_in = s_.comp_side_dir;
-    const double cross = t_in.x() * t_out.y() - t_in.y() * t_out.x();
-    const double turn = std::atan2(std::abs(cross), std::clamp(t_in.dot(t_out), -1.0, 1.0));
-    const bool inside = s_.comp_side == 1 ? cross > 0 : cross < 0;
-    if (inside && turn > 0.05) {
+    bool inside = false;
+    const double turn = xy_turn_rad(s_.comp_side_dir, t_out, s_.comp_side, inside);
+    if (inside && turn > kLinuxCncCornerTurnRad) {
       const double r = s_.comp_radius_mm, c = std::cos(turn / 2);
       trim = r * std::tan(turn / 2);
       rate = r / (2 * c * c);

@@ -79,4 +79,26 @@ double distance_to_path(const Motion& m, const Eigen::Vector3d& p) {
   return best;
 }
 
+Eigen::Vector2d xy_tangent(const Motion& m, bool at_end) {
+  if (m.kind == MotionKind::kArc && m.plane == 0) {
+    const Eigen::Vector3d& p = at_end ? m.end_mm : m.start_mm;
+    const Eigen::Vector2d radial(p.x() - m.center_mm.x(), p.y() - m.center_mm.y());
+    // Counter-clockwise: the radius turned +90 degrees.
+    const Eigen::Vector2d t = m.clockwise ? Eigen::Vector2d(radial.y(), -radial.x())
+                                          : Eigen::Vector2d(-radial.y(), radial.x());
+    const double n = t.norm();
+    return n > 0 ? Eigen::Vector2d(t / n) : Eigen::Vector2d::Zero();
+  }
+  const Eigen::Vector2d d(m.end_mm.x() - m.start_mm.x(), m.end_mm.y() - m.start_mm.y());
+  const double n = d.norm();
+  return n > 0 ? Eigen::Vector2d(d / n) : Eigen::Vector2d::Zero();
+}
+
+double xy_turn_rad(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out, int side,
+                   bool& inside) {
+  const double cross = t_in.x() * t_out.y() - t_in.y() * t_out.x();
+  inside = side == 1 ? cross > 0 : cross < 0;
+  return std::atan2(std::abs(cross), std::clamp(t_in.dot(t_out), -1.0, 1.0));
+}
+
 }  // namespace volmap::nc

@@ -34,4 +34,19 @@ bool linuxcnc_accepts_radii(double r_start, double r_end, bool inch, double marg
 /// Distance (mm) from p to the nearest point of the motion's path.
 double distance_to_path(const Motion& m, const Eigen::Vector3d& p);
 
+/// The unit tangent in the XY plane of motion m at its start or its end;
+/// zero where m does not move in XY there.
+Eigen::Vector2d xy_tangent(const Motion& m, bool at_end);
+
+/// The turn (rad, 0 .. pi) from direction t_in to t_out in XY, and whether
+/// it turns towards a tool on `side` (1 left, G41; 2 right, G42): an inside
+/// corner of cutter compensation.
+double xy_turn_rad(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out, int side,
+                   bool& inside);
+
+/// LinuxCNC's interpreter goes round a corner of the offset path (an arc
+/// outside, the offsets' intersection inside) only where the path turns by
+/// more than this; below it the tool jumps from one offset to the next.
+inline constexpr double kLinuxCncCornerTurnRad = 0.05;
+
 }  // namespace volmap::nc

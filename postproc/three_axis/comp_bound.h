@@ -7,18 +7,9 @@
 
 #include <Eigen/Core>
 
-#include "gcode/nc_interpreter.h"
+#include "gcode/nc_path.h"
 
 namespace volmap::post {
-
-/// The unit tangent in the XY plane of motion m at its start or its end;
-/// zero where m does not move in XY there.
-Eigen::Vector2d xy_tangent(const nc::Motion& m, bool at_end);
-
-/// LinuxCNC's interpreter goes round a corner of the offset path (an arc
-/// outside, the offsets' intersection inside) only where the path turns by
-/// more than this; below it the tool jumps from one offset to the next.
-inline constexpr double kLinuxCncCornerTurnRad = 0.05;
 
 /// g of the corner from a move ending along t_in into one starting along
 /// t_out, with the tool on `side` (1 left, G41; 2 right, G42): 2 where the
@@ -30,7 +21,7 @@ inline constexpr double kLinuxCncCornerTurnRad = 0.05;
 double comp_corner_factor(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out, int side);
 
 /// Where the correction may carry a corner's turn across
-/// kLinuxCncCornerTurnRad (the turn within margin_rad of it), the change of
+/// nc::kLinuxCncCornerTurnRad (the turn within margin_rad of it), the change of
 /// path that makes: the sagitta r (1 - cos(turn / 2)) of the corner arc
 /// outside, the overshoot r (1 - cos turn) of an untrimmed inside corner;
 /// else 0 (mm).

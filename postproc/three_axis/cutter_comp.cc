@@ -38,7 +38,7 @@ void ProgramPost::check_compensation(const Corrector& c, const nc::BlockEffect& 
   const nc::State& s = interp_.state();
   const double r = s.comp_radius_mm;
   const double L = c.zero() ? 0.0 : c.lipschitz_bound();
-  const Eigen::Vector2d t_out = xy_tangent(m, false);
+  const Eigen::Vector2d t_out = nc::xy_tangent(m, false);
   const double lever = tangent_lever_mm(m);
   double g = 2.0, extra_mm = 0.0;
   if (role == nc::CompRole::kEntry && m.kind == nc::MotionKind::kArc && comp_move_)
@@ -59,7 +59,7 @@ void ProgramPost::check_compensation(const Corrector& c, const nc::BlockEffect& 
     // correction (at most L on each side) and by the output's rounding
     // (half a unit on each axis at both ends: up to 2 units across a move,
     // over its lever).
-    const double unit_mm = std::pow(10.0, -decimals()) * s.unit_mm;
+    const double unit_mm = 2 * half_unit(decimals()) * s.unit_mm;
     const double margin = 2 * L + 2 * unit_mm / std::max(comp_lever_in_, 1e-300) +
                           2 * unit_mm / std::max(lever, 1e-300);
     extra_mm = comp_threshold_term_mm(comp_tangent_in_, t_out, s.comp_side, r, margin);
@@ -82,7 +82,7 @@ void ProgramPost::check_compensation(const Corrector& c, const nc::BlockEffect& 
   // The correction of a move along Z alone would move X and Y a little: a
   // move in the plane, which the controller would offset as a corner.
   comp_hold_xy_ = comp_move_ && role == nc::CompRole::kCompensated && t_out.isZero(0.0);
-  const Eigen::Vector2d t_end = xy_tangent(m, true);
+  const Eigen::Vector2d t_end = nc::xy_tangent(m, true);
   if (!t_end.isZero(0.0)) comp_tangent_in_ = t_end, comp_lever_in_ = lever;
   if (role == nc::CompRole::kExit) comp_tangent_in_.setZero();
   ++report_.comp_moves;
@@ -110,7 +110,7 @@ void ProgramPost::check_comp_pieces(const Corrector& c, double piece_lever_mm) {
   const nc::State& s = interp_.state();
   const double L = c.lipschitz_bound();
   const double turn =
-      2 * L + 2 * std::pow(10.0, -decimals()) * s.unit_mm / std::max(piece_lever_mm, 1e-300);
+      2 * L + 4 * half_unit(decimals()) * s.unit_mm / std::max(piece_lever_mm, 1e-300);
   check_comp_bound(comp_factor_ * s.comp_radius_mm * L + s.comp_radius_mm * (1 - std::cos(turn)),
                    "the pieces of ", comp_factor_, L);
 }

@@ -65,7 +65,7 @@ void check_same_compensation(const std::vector<CompStart>& nominal,
 std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
                                  const nc::ProgramSetup& setup, double default_tool_mm,
                                  const std::vector<std::string>& subroutine_path,
-                                 double& comp_radius_mm, std::vector<CompStart>& comps) {
+                                 std::vector<CompStart>& comps) {
   nc::Interpreter interp(setup, name);
   nc::ProgramReader reader(in, name, interp, subroutine_path);
   std::vector<FeedMove> out;
@@ -82,8 +82,6 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
     b.evaluated = l.rewritten;
     interp.execute(b, fx);
     if (!fx.has_motion) continue;
-    if (fx.comp_role != nc::CompRole::kNone)
-      comp_radius_mm = std::max(comp_radius_mm, interp.state().comp_radius_mm);
     if (fx.comp_role == nc::CompRole::kEntry)
       comps.push_back({interp.state().comp_side, interp.state().comp_radius_mm, number});
     // The machine file's tool (offset zero) plus the active tool length offset.
@@ -240,13 +238,15 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
                              const nc::ProgramSetup& setup, const VerifyOptions& options) {
   VerifyResult r;
   std::vector<CompStart> nominal_comps, compensated_comps;
-  const std::vector<FeedMove> nom =
-      feed_moves(nominal, nominal_name, setup, machine.tool_length_mm, options.subroutine_path,
-                 r.comp_radius_mm, nominal_comps);
+  const std::vector<FeedMove> nom = feed_moves(nominal, nominal_name, setup, machine.tool_length_mm,
+                                               options.subroutine_path, nominal_comps);
   const std::vector<FeedMove> out =
       feed_moves(compensated, compensated_name, setup, machine.tool_length_mm,
-                 options.subroutine_path, r.comp_radius_mm, compensated_comps);
+                 options.subroutine_path, compensated_comps);
   check_same_compensation(nominal_comps, compensated_comps, compensated_name);
+  // (Every compensated move follows an entry with its radius.)
+  for (const CompStart& k : nominal_comps)
+    r.comp_radius_mm = std::max(r.comp_radius_mm, k.radius_mm);
   Run run(machine, errors, options.outside);
   std::vector<FeedMove> nominal_path;
   for (const FeedMove& f : nom)

@@ -54,6 +54,15 @@ std::string write_program(const std::string& name, const std::string& text) {
   return path;
 }
 
+// The options every run here shares: the sample machine at work offset
+// 100,100,100 with `errors` (default: the sample's) and the mm tool table.
+std::string sample_options(const std::string& mm_table, const std::string& errors = "") {
+  return fmt::format("--machine {} --errors {} --work-offset 100,100,100 --tool-table {}",
+                     test::source_path("samples/machines/hsu-3axis.json"),
+                     errors.empty() ? test::source_path("samples/errors/hsu-3axis.csv") : errors,
+                     mm_table);
+}
+
 struct Kept {
   const char* name;
   const char* text;
@@ -105,11 +114,8 @@ TEST(CutterCompensation, KeptCompensationPutsTheToolCentreWithinToleranceAsRs274
     const std::string in = k.text ? write_program(k.name, k.text) : nisley;
     const std::string out = (dir() / (std::string("post-") + k.name)).string();
     const std::string cmd =
-        test::volmap_binary() +
-        fmt::format(
-            " post --machine {} --errors {} --work-offset 100,100,100 --tolerance-um {} "
-            "--tool-table {} {} -o {} 2>{}.log",
-            machine, errors, kToleranceUm, mm, in, out, out);
+        test::volmap_binary() + fmt::format(" post {} --tolerance-um {} {} -o {} 2>{}.log",
+                                            sample_options(mm, errors), kToleranceUm, in, out, out);
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << test::file_bytes(out + ".log");
     // The codes are kept, and stderr says so with the bound.
     EXPECT_NE(test::file_bytes(out + ".log").find("cutter compensation (G41/G42) kept over"),
@@ -134,10 +140,9 @@ TEST(CutterCompensation, KeptCompensationPutsTheToolCentreWithinToleranceAsRs274
     std::printf("%s: tool centre off the nominal one: before %.2f um, after %.2f um\n", k.name,
                 before_um, after_um);
     // verify reads both, measures the programmed contours and says so.
-    const test::CliResult v = test::run_volmap(fmt::format(
-        "verify --machine {} --errors {} --work-offset 100,100,100 --tool-table {} --nominal {} "
-        "--program {} --tolerance-um {} --json",
-        machine, errors, mm, in, out, kToleranceUm));
+    const test::CliResult v =
+        test::run_volmap(fmt::format("verify {} --nominal {} --program {} --tolerance-um {} --json",
+                                     sample_options(mm, errors), in, out, kToleranceUm));
     EXPECT_EQ(v.status, 0) << v.err;
     EXPECT_NE(v.err.find("keep cutter compensation"), std::string::npos) << v.err;
     const nlohmann::json doc = nlohmann::json::parse(v.out);
@@ -151,9 +156,8 @@ TEST(CutterCompensation, AZeroErrorMachineGetsTheProgramBackByteForByte) {
   for (const Kept& k : kKept) {
     const std::string in = write_program(k.name, k.text);
     const std::string out = (dir() / (std::string("zero-") + k.name)).string();
-    const test::CliResult r = test::run_volmap(fmt::format(
-        "post --machine {} --errors {} --work-offset 100,100,100 --tool-table {} {} -o {}",
-        test::source_path("samples/machines/hsu-3axis.json"), zero, mm, in, out));
+    const test::CliResult r =
+        test::run_volmap(fmt::format("post {} {} -o {}", sample_options(mm, zero), in, out));
     ASSERT_EQ(r.status, 0) << k.name << ": " << r.err;
     EXPECT_EQ(test::file_bytes(out), k.text) << k.name;
   }
@@ -214,10 +218,7 @@ TEST(CutterCompensation, WhatRs274RefusesUnderCompensationVolmapRefusesWithFileL
         name, std::string("G21 G17 G90\nT1 M6\nG0 X-10 Y-10 Z5\nG1 Z-1 F300\n") + k.body + "M2\n");
     const std::string out = (dir() / ("out-" + name)).string();
     const test::CliResult r = test::run_volmap(
-        fmt::format("post --machine {} --errors {} --work-offset 100,100,100 --tolerance-um 40 "
-                    "--tool-table {} {} -o {}",
-                    test::source_path("samples/machines/hsu-3axis.json"),
-                    test::source_path("samples/errors/hsu-3axis.csv"), mm, in, out));
+        fmt::format("post {} --tolerance-um 40 {} -o {}", sample_options(mm), in, out));
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.err.find(name + ":"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(k.message), std::string::npos) << r.err;
@@ -231,10 +232,8 @@ TEST(CutterCompensation, ABoundAboveAQuarterOfTheToleranceIsRefusedWithItsNumber
   const auto [inch, mm] = diameter_tables();
   const std::string in = write_program("bound.ngc", kKept[0].text);
   const std::string out = (dir() / "bound-out.ngc").string();
-  const test::CliResult r = test::run_volmap(fmt::format(
-      "post --machine {} --errors {} --work-offset 100,100,100 --tool-table {} {} -o {}",
-      test::source_path("samples/machines/hsu-3axis.json"),
-      test::source_path("samples/errors/hsu-3axis.csv"), mm, in, out));
+  const test::CliResult r =
+      test::run_volmap(fmt::format("post {} {} -o {}", sample_options(mm), in, out));
   EXPECT_EQ(r.status, 1);
   // The entry (line 5): radius 1.5875 mm, g = 2 (LinuxCNC ends it at the
   // end's offset square to the move), and the sample's slope bound.
@@ -263,10 +262,7 @@ TEST(CutterCompensation, ToolTableParametersAreTheLoadedToolsRow) {
                     "G21 G90\nT1 M6\nG0 X#5403 Y#5410 Z10\nG43 H2\nG0 X#5410\nG10 L1 P1 Z4 R2\n"
                     "G0 X#5403 Y#5410\nM2\n");
   const std::string out = (dir() / "params-out.ngc").string();
-  const std::string args =
-      fmt::format("post --machine {} --errors {} --work-offset 100,100,100 --tool-table {} ",
-                  test::source_path("samples/machines/hsu-3axis.json"),
-                  test::source_path("samples/errors/hsu-3axis.csv"), mm);
+  const std::string args = "post " + sample_options(mm) + " ";
   const test::CliResult r = test::run_volmap(args + in + " -o " + out);
   ASSERT_EQ(r.status, 0) << r.err;
   // Written flat: the values, moved by the correction (some µm).
@@ -299,11 +295,8 @@ TEST(CutterCompensation, VerifyRefusesProgramsWhoseCompensationDiffers) {
   std::string edited = kKept[0].text;
   edited.replace(edited.find("G41 D1"), 6, "G42 D1");
   const std::string other = write_program("verify-other.ngc", edited);
-  const test::CliResult v = test::run_volmap(fmt::format(
-      "verify --machine {} --errors {} --work-offset 100,100,100 --tool-table {} --nominal {} "
-      "--program {}",
-      test::source_path("samples/machines/hsu-3axis.json"),
-      test::source_path("samples/errors/hsu-3axis.csv"), mm, in, other));
+  const test::CliResult v = test::run_volmap(
+      fmt::format("verify {} --nominal {} --program {}", sample_options(mm), in, other));
   EXPECT_EQ(v.status, 1);
   EXPECT_NE(v.err.find("verify-other.ngc:5: cutter compensation G42 with radius 1.5875 mm (line "
                        "5) differs from the nominal program's (G41 with radius 1.5875 mm"),
@@ -317,11 +310,8 @@ TEST(CutterCompensation, LostMotionTakenUpUnderCompensationIsRefused) {
   const auto [inch, mm] = diameter_tables();
   const std::string in = write_program("play.ngc", kKept[1].text);
   const std::string out = (dir() / "play-out.ngc").string();
-  const test::CliResult r = test::run_volmap(fmt::format(
-      "post --machine {} --errors {} --work-offset 100,100,100 --tolerance-um 40 --tool-table {} "
-      "{} -o {}",
-      test::source_path("samples/machines/hsu-3axis.json"),
-      test::source_path("samples/errors/hsu-3axis.csv"), mm, in, out));
+  const test::CliResult r = test::run_volmap(
+      fmt::format("post {} --tolerance-um 40 {} -o {}", sample_options(mm), in, out));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("play.ngc:7: an axis with lost motion turns round here under cutter "
                        "compensation"),
