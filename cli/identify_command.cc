@@ -40,6 +40,7 @@ IdentifyResult identify_naming_flags(const Machine& m, const Recordings& rec,
 Runner register_identify(CLI::App& app) {
   struct Opts {
     std::string machine, recordings, output, known, model = "independent", params;
+    std::string convention = "iso230-1";
     std::vector<std::string> components;
     bool json = false, setup_offsets = false;
   };
@@ -68,6 +69,10 @@ Runner register_identify(CLI::App& app) {
                 "Fit a constant offset (x, y, z) per run: the ball or instrument setup");
   sub->add_option("--model", o->model, "independent (default) or dependent")
       ->check(CLI::IsMember({"independent", "dependent"}));
+  sub->add_option("--convention", o->convention,
+                  "Meaning of the location errors written: iso230-1 (default, errors.md) or link "
+                  "(Lei & Hsu's link errors); --known must be in the same one")
+      ->check(CLI::IsMember({"iso230-1", "link"}));
   sub->add_flag("--json", o->json, "Write the report as one JSON document to stdout");
   sub->footer(
       "Example:\n  volmap identify --machine samples/machines/lei-hsu-xyzac.json "
@@ -87,6 +92,7 @@ Runner register_identify(CLI::App& app) {
     };
     opt.formulation = o->model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
     opt.setup_offsets = o->setup_offsets;
+    opt.convention = *parse_location_convention(o->convention);
     std::string known_text;
     ErrorSet known;
     if (!o->known.empty()) {
@@ -120,6 +126,7 @@ Runner register_identify(CLI::App& app) {
         {"source", fmt::format("volmap identify from {} ({} observations, rms residual {:.6f} µm)",
                                o->recordings, res.equations, res.rms_after_um)}};
     if (!o->known.empty()) meta["known"] = o->known;
+    meta["convention"] = o->convention;
     if (!res.warnings.empty()) meta["warning"] = res.warnings.front();
     AtomicOutput out(o->output, inputs);
     write_identified_errors_csv(out.stream(), res, meta, known_text);

@@ -35,7 +35,7 @@ nlohmann::ordered_json um3(const Eigen::Vector3d& v) {
 }
 
 struct SensitivityOptions {
-  std::string machine, errors, at, model = "independent";
+  std::string machine, errors, at, model = "independent", convention = "iso230-1";
   bool json = false, other_machine_errors = false;
 };
 
@@ -46,6 +46,7 @@ struct SensitivityResult {
   std::vector<ErrorGain> gains;
   std::optional<ErrorModel> model;
   std::vector<double> values;
+  LocationConvention convention = LocationConvention::kIso230;
 };
 
 /// --json: one document with the gains and, with --errors, each error's
@@ -53,6 +54,7 @@ struct SensitivityResult {
 void print_sensitivity_json(const SensitivityOptions& o, const SensitivityResult& r) {
   nlohmann::ordered_json doc;
   doc["model"] = o.model;
+  doc["convention"] = location_convention_name(r.convention);
   nlohmann::ordered_json at = nlohmann::ordered_json::object();
   for (int i = 0; i < r.machine.axis_count(); ++i) {
     const AxisName a = r.machine.axis_order[static_cast<size_t>(i)];
@@ -86,9 +88,10 @@ void print_sensitivity_json(const SensitivityOptions& o, const SensitivityResult
 
 /// The table for people.
 void print_sensitivity_text(const SensitivityOptions& o, const SensitivityResult& r) {
-  std::cout << fmt::format("Error gains of {} ({} model, {}) at {}\n",
+  std::cout << fmt::format("Error gains of {} ({} model, {}; location errors: {}) at {}\n",
                            r.machine.name.empty() ? o.machine : r.machine.name, o.model,
-                           o.model == "dependent" ? "Hsu Table I" : "Hsu Table II", o.at);
+                           o.model == "dependent" ? "Hsu Table I" : "Hsu Table II",
+                           location_convention_name(r.convention), o.at);
   std::cout << "Position gains in mm per mm (translational errors) or mm per rad "
                "(angular);\norientation gains in rad per rad. Workpiece coordinates.\n\n";
   std::cout << fmt::format("{:<6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>7}", "error", "dx", "dy",
@@ -142,6 +145,10 @@ Runner register_sensitivity(CLI::App& app) {
   sub->add_option("--errors", o->errors,
                   "Errors CSV (errors.md): adds each error's value and its contribution "
                   "to the tool-tip error at --at, and the total (first order and exact)");
+  sub->add_option("--convention", o->convention,
+                  "Meaning of the location errors' gains without --errors: iso230-1 (default) or "
+                  "link (with --errors: the file's)")
+      ->check(CLI::IsMember({"iso230-1", "link"}));
   add_other_machine_flag(*sub, o->other_machine_errors);
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
   sub->footer(
@@ -153,15 +160,20 @@ Runner register_sensitivity(CLI::App& app) {
     const AxisVector u = parse_axis_position(m, o->at, "--at");
     const Formulation f =
         o->model == "dependent" ? Formulation::kDependent : Formulation::kIndependent;
-    SensitivityResult r{m, u, error_gains(m, f, u), std::nullopt, {}};
-    // With --errors: value of each error at u and its contribution (um).
+    SensitivityResult r{m, u, {}, std::nullopt, {}};
+    // With --errors: value of each error at u and its contribution (um);
+    // the gains of location errors in the file's meaning.
+    LocationConvention convention = *parse_location_convention(o->convention);
     if (!o->errors.empty()) {
       r.model.emplace(
           m,
           load_errors_for(m, o->machine, o->errors, ErrorsFormat::kVolmap, o->other_machine_errors),
           ModelOptions{f, OutsidePolicy::kError});
       r.values = error_values(m, r.model->errors(), u, OutsidePolicy::kError);
+      convention = r.model->errors().convention;
     }
+    r.gains = error_gains(m, f, u, convention);
+    r.convention = convention;
     if (o->json) {
       print_sensitivity_json(*o, r);
       return 0;

@@ -54,7 +54,7 @@ Runner register_simulate(CLI::App& app) {
     const Plan plan = load_plan_json(o->plan, m);
     std::unique_ptr<EffectSet> effects;
     if (!o->effects.empty()) {
-      const GainEvaluator gains(m, model.options().formulation);
+      const GainEvaluator gains(m, model.options().formulation, model.errors().convention);
       effects = std::make_unique<EffectSet>(load_effects_json(o->effects, m, gains));
     }
     std::map<std::string, std::string> meta{{"machine", o->machine},

@@ -61,7 +61,9 @@ class ModelsByTool {
         mt.measurement_tool_length_mm = machine_.tool_length_mm;
       mt.tool_length_mm = tool_mm;
       auto models = std::make_unique<Models>(
-          Models{GainEvaluator(mt, Formulation::kIndependent), std::nullopt});
+          Models{GainEvaluator(mt, Formulation::kIndependent,
+                               baseline_ ? baseline_->convention : LocationConvention::kIso230),
+                 std::nullopt});
       if (baseline_) models->baseline.emplace(mt, *baseline_);
       it = by_tool_.emplace(tool_mm, std::move(models)).first;
     }

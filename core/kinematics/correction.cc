@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -44,30 +45,43 @@ class InverseJacobian {
     }
     // |dQ/dq_outer| = |w_outer x Q|: the sine of the angle between them.
     singular_ = G_.col(0).norm() <= singular_sin;
-    if (singular_)
+    // Damped, the outer correction fades to zero continuously as Q reaches
+    // the outer axis (at most |Q x w_outer| |dQ| / lambda^2): the damped
+    // solve holds down to the singular position itself, so that the
+    // correction does not jump at singular_sin.
+    damped_ = outer_damping > 0;
+    if (singular_ && !damped_) {
       g_inner_ls_ = G_.col(1).transpose() / G_.col(1).squaredNorm();
-    else {
+    } else {
       Eigen::Matrix2d N = G_.transpose() * G_;
-      N(0, 0) += outer_damping * outer_damping;
-      N_inv_G_t_ = N.inverse() * G_.transpose();
+      damping2_ = outer_damping * outer_damping;
+      N(0, 0) += damping2_;
+      N_inv_ = N.inverse();
+      N_inv_G_t_ = N_inv_ * G_.transpose();
     }
   }
 
   bool singular() const { return singular_; }
+  /// |w_outer x Q|: the sine of the angle between the outer axis and Q.
+  double outer_sin() const { return G_.col(0).norm(); }
 
   // du with J du = b (least squares on the orientation rows).
   void solve(const Eigen::Vector3d& bP, const Eigen::Vector3d& bQ, AxisVector& du) const {
-    Eigen::Vector2d dr = Eigen::Vector2d::Zero();
-    if (kin_.has_rotary_axes()) {
-      if (singular_)
-        dr[1] = g_inner_ls_ * bQ;
-      else
-        dr = N_inv_G_t_ * bQ;
-      du[rot_[0]] = dr[0];
-      du[rot_[1]] = dr[1];
-    }
-    const Eigen::Vector3d dl = Jl_inv_ * (bP - J_pr_ * dr);
-    for (int c = 0; c < 3; ++c) du[lin_[static_cast<size_t>(c)]] = dl[c];
+    solve_damped(bP, bQ, 0.0, du);
+  }
+
+  // The chord-Newton step at the iterate du_now with residual r = F_e(u +
+  // du_now) - v: the step J^-1 r, and with the outer axis damped also the
+  // damping's pull on what du_now already turns the outer axis,
+  // N^-1 diag(lambda^2, 0) du_now. Its fixed point (a zero step) has the
+  // position exact and the gradient of |r_Q|^2 + lambda^2 du_outer^2 zero:
+  // the damped solution of eq. 4, where the one step of eq. 6 is the damped
+  // solution of the linearised problem. (The plain step's fixed point is the
+  // undamped solution, whose outer correction grows as 1/|Q x w_outer|
+  // towards the singular position: the iteration would undo the damping.)
+  void iteration_step(const Eigen::Vector3d& rP, const Eigen::Vector3d& rQ,
+                      const AxisVector& du_now, AxisVector& step) const {
+    solve_damped(rP, rQ, kin_.has_rotary_axes() ? damping2_ * du_now[rot_[0]] : 0.0, step);
   }
 
  private:
@@ -79,7 +93,27 @@ class InverseJacobian {
   Eigen::Matrix<double, 3, 2> G_ = Eigen::Matrix<double, 3, 2>::Zero();
   Eigen::Matrix<double, 2, 3> N_inv_G_t_ = Eigen::Matrix<double, 2, 3>::Zero();
   Eigen::Matrix<double, 1, 3> g_inner_ls_ = Eigen::Matrix<double, 1, 3>::Zero();
+  Eigen::Matrix2d N_inv_ = Eigen::Matrix2d::Zero();
+  double damping2_ = 0.0;  ///< lambda^2 (0 undamped)
   bool singular_ = false;
+  bool damped_ = false;
+
+  // du with J du = b, the rotary block's right-hand side G^T bQ plus
+  // (outer_pull, 0).
+  void solve_damped(const Eigen::Vector3d& bP, const Eigen::Vector3d& bQ, double outer_pull,
+                    AxisVector& du) const {
+    Eigen::Vector2d dr = Eigen::Vector2d::Zero();
+    if (kin_.has_rotary_axes()) {
+      if (singular_ && !damped_)
+        dr[1] = g_inner_ls_ * bQ;
+      else
+        dr = N_inv_G_t_ * bQ + N_inv_.col(0) * outer_pull;
+      du[rot_[0]] = dr[0];
+      du[rot_[1]] = dr[1];
+    }
+    const Eigen::Vector3d dl = Jl_inv_ * (bP - J_pr_ * dr);
+    for (int c = 0; c < 3; ++c) du[lin_[static_cast<size_t>(c)]] = dl[c];
+  }
 };
 
 // The chord-Newton iterate: the correction du and the step J^-1 (F_e(u + du) - v)
@@ -138,12 +172,16 @@ CorrectionResult CorrectionSolver::correct(const AxisVector& u, const ApproachDi
   // Iterate to eq. 4 (core/kinematics/fixed_point.h), stopping once the
   // step is within the tolerances.
   ChordNewtonIterate x{r.du, AxisVector::Zero(m.axis_count())};
+  const int max_iterations =
+      kin_.has_rotary_axes() && Jinv.outer_sin() < options_.iterate_below_sin
+          ? std::max(options_.max_iterations, CorrectionOptions::kNearSingularIterations)
+          : options_.max_iterations;
   const FixedPointOutcome outcome = iterate_to_fixed_point(
-      x, FixedPointLimits{1, options_.max_iterations},
+      x, FixedPointLimits{1, max_iterations},
       [&](const ChordNewtonIterate& previous) {
         ChordNewtonIterate next{previous.du, AxisVector(m.axis_count())};
         const ToolPose a = model_.actual(u + previous.du, dir);
-        Jinv.solve(a.tip_mm - v.tip_mm, a.axis - v.axis, next.step);
+        Jinv.iteration_step(a.tip_mm - v.tip_mm, a.axis - v.axis, previous.du, next.step);
         next.du -= next.step;
         return next;
       },
@@ -152,7 +190,7 @@ CorrectionResult CorrectionSolver::correct(const AxisVector& u, const ApproachDi
       });
   r.du = x.du;
   r.iterations = outcome.iterations;
-  if (options_.max_iterations > 1 || options_.residual) {
+  if (max_iterations > 1 || options_.residual) {
     const ToolPose a = model_.actual(u + r.du, dir);
     r.residual_mm = (a.tip_mm - v.tip_mm).norm();
     r.residual_axis = (a.axis - v.axis).norm();

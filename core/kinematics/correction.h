@@ -24,13 +24,24 @@
 // for X'Y'ZA'C'): the outer axis's correction is suppressed (section 4.1);
 // the inner axis corrects the orientation error along the direction it can
 // turn the tool (least squares), the linear axes the position exactly.
+// With outer_damping > 0 the damped solve holds there too: its outer
+// correction fades continuously to zero as Q reaches the outer axis (at
+// most |Q x w_outer| |dQ| / lambda^2) instead of jumping to zero at
+// singular_sin; `singular` is still reported.
 //
 // Iteration (max_iterations > 1): the chord-Newton method on eq. 4 with the
 // nominal J at u, du <- du - J^-1 (F_e(u + du) - v), until the residual is
 // below the tolerances. Converges at the rate of the errors' relative size
 // (1e-4 per step for realistic errors). With the outer axis suppressed the
 // fixed point has the position exact and the orientation residual
-// perpendicular to what the inner axis can turn.
+// perpendicular to what the inner axis can turn. With it damped
+// (outer_damping) the step also carries the damping's pull on the outer
+// correction already made, so that the fixed point is the damped solution
+// of eq. 4 (position exact, |dQ_left|^2 + lambda^2 du_outer^2 least), as
+// the one step is of its linearisation: the plain step's fixed point is the
+// undamped solution, whose outer correction grows as 1 / |Q x w_outer|
+// (75 mrad of C for 134 urad at A = 0.07 deg on the lei-hsu sample), and it
+// converges there only at the rate lambda^2 / (sin^2 + lambda^2).
 //
 // Three-axis machines: J = J_l (3 x 3; +I for a tool on X, Y, Z carriages, so
 // du = -dv, and the iteration is the fixed point x_cmd + e(x_cmd) = x_nominal).
@@ -62,12 +73,21 @@ struct CorrectionOptions {
   /// the rotary block solves (G^T G + diag(lambda^2, 0)) dr = G^T dQ, so the
   /// outer axis never turns more than 1/(2 lambda) times the orientation
   /// error it corrects; the part of that error it leaves is the tool-axis
-  /// error's component that only the outer axis could remove. 0: eq. 6 as
-  /// the paper has it (undamped above singular_sin).
+  /// error's component that only the outer axis could remove. Also within
+  /// singular_sin (continuous down to the singular position) and in the
+  /// iteration (its fixed point is the damped solution). 0: eq. 6 as the
+  /// paper has it (undamped above singular_sin).
   double outer_damping = 0.0;
   /// Evaluate the residual of a one-step correction too (one more model
   /// evaluation).
   bool residual = false;
+  /// Iterate (as max_iterations = kNearSingularIterations) wherever the
+  /// sine of the angle between the tool axis and the outer rotary axis is
+  /// below this: near the singular position the outer axis turns far and one
+  /// step leaves more than a tolerance's worth (1.27 um at A = -3 deg on the
+  /// lei-hsu sample, docs/kinematics.md). 0: never.
+  double iterate_below_sin = 0.0;
+  static constexpr int kNearSingularIterations = 20;
 
   /// Empty when valid, else what is wrong.
   std::string invalid_reason() const;

@@ -243,9 +243,17 @@ ComponentFitError::ComponentFitError(const std::string& detail)
     : std::invalid_argument("component " + detail), detail_(detail) {}
 
 IdentifyResult identify(const Machine& m, const Recordings& rec, const IdentifyOptions& opt) {
-  GainEvaluator gains(m, opt.formulation);
+  if (opt.known && opt.known->convention != opt.convention)
+    throw std::invalid_argument(fmt::format(
+        "{} gives its location errors in the {} convention, and they are to be identified in the "
+        "{} convention; convert the file first (volmap convert --to {}), or identify in its "
+        "convention",
+        opt.known->file, location_convention_name(opt.known->convention),
+        location_convention_name(opt.convention), location_convention_name(opt.convention)));
+  GainEvaluator gains(m, opt.formulation, opt.convention);
   ErrorSet base;
   if (opt.known) base = *opt.known;
+  base.convention = opt.convention;
   base.file = opt.known ? opt.known->file : std::string("<identified>");
 
   if (opt.progress) opt.progress("computing the sensitivities", 0, 0);

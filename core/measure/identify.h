@@ -62,6 +62,8 @@ class ComponentFitError : public std::invalid_argument {
 
 struct IdentifyOptions {
   Formulation formulation = Formulation::kIndependent;
+  /// What the fitted (and the known) location errors mean.
+  LocationConvention convention = LocationConvention::kIso230;
   /// Location errors to fit; empty: every location error of the model
   /// (model_error_names) that `known` does not give.
   std::vector<std::string> parameters;

@@ -25,7 +25,7 @@ double NormalSource::next() {
 Recordings simulate(const ErrorModel& model, const Plan& plan, const EffectSet* effects,
                     const std::map<std::string, std::string>& metadata) {
   const Machine& m = model.machine();
-  GainEvaluator gains(m, model.options().formulation);
+  GainEvaluator gains(m, model.options().formulation, model.errors().convention);
   if (effects != nullptr) {
     for (const Effect& e : effects->effects) {
       if (e.kind != EffectKind::kThermalDrift || e.law != DriftLaw::kTemperature) continue;

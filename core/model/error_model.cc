@@ -111,21 +111,10 @@ ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
   levers(tool_, machine_.tool_chain);
 
   // Constant part of each joint: Trans(offset) * L (exact), with the
-  // independent pivot folded into L's translation.
-  for (auto* chain : {&workpiece_, &tool_}) {
-    for (BoundJoint& bj : *chain) {
-      SmallTransform L = bj.location;
-      const Eigen::Matrix3d R_L = small_rotation_exact(L.eps_rad);
-      if (bj.independent) L.delta_mm -= (R_L - Eigen::Matrix3d::Identity()) * bj.r_meas_mm;
-      // Trans(offset) * L = [R_L | offset + delta_L]
-      bj.R_parent_loc = R_L;
-      bj.has_location_rotation = !L.eps_rad.isZero(0.0);
-      if (bj.joint->rotary)
-        for (int a = 0; a < 3; ++a)
-          if (bj.joint->direction_parent == Eigen::Vector3d::Unit(a)) bj.coordinate_axis = a;
-      bj.t_parent_loc_mm = bj.joint->offset_parent_mm + L.delta_mm;
-    }
-  }
+  // independent pivot folded into L's translation; and ISO 230-1's P.
+  const bool iso = errors_.convention == LocationConvention::kIso230;
+  for (auto* chain : {&workpiece_, &tool_})
+    for (BoundJoint& bj : *chain) set_location_frames(bj, iso);
 
   // tip_error_linear's flat plan: the same numbers, copied.
   if (all_linear_) {
@@ -144,11 +133,13 @@ ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
         J.workpiece = bj.side == ChainSide::kWorkpiece;
         J.independent = bj.independent;
         J.has_location_rotation = bj.has_location_rotation;
+        J.conjugated = bj.conjugated;
         for (int i = 0; i < 3; ++i) {
           J.direction[i] = bj.joint->direction_parent[i];
           J.offset_mm[i] = bj.joint->offset_parent_mm[i];
           J.t_loc_mm[i] = bj.t_parent_loc_mm[i];
           J.r_meas_mm[i] = bj.r_meas_mm[i];
+          J.t_P_mm[i] = bj.t_P_mm[i];
           for (int j = 0; j < 3; ++j) J.R_loc[i][j] = bj.R_parent_loc(i, j);
           J.R_loc_col01[i][0] = bj.R_parent_loc(0, i);
           J.R_loc_col01[i][1] = bj.R_parent_loc(1, i);
@@ -159,6 +150,38 @@ ErrorModel::ErrorModel(Machine machine, ErrorSet errors, ModelOptions options)
     linear_work_ = static_cast<int>(workpiece_.size());
     linear_count_ = k;
   }
+}
+
+void ErrorModel::set_location_frames(BoundJoint& bj, bool iso) {
+  SmallTransform L = bj.location;
+  Eigen::Matrix3d R_L = small_rotation_exact(L.eps_rad);
+  const int own = bj.joint->rotary ? static_cast<int>(bj.joint->axis) - 3 : -1;
+  if (iso && own >= 0) {
+    // ISO 230-1: P places the axis line (offsets and tilts), the zero error
+    // turns about the actual line: L = P Rot(e_own, zero).
+    Eigen::Vector3d eps_line = L.eps_rad;
+    eps_line[own] = 0.0;
+    bj.R_P = small_rotation_exact(eps_line);
+    R_L = bj.R_P * axis_rotation(Eigen::Vector3d::Unit(own), L.eps_rad[own]);
+  }
+  if (bj.independent) L.delta_mm -= (R_L - Eigen::Matrix3d::Identity()) * bj.r_meas_mm;
+  if (iso && own < 0) bj.R_P = R_L;  // a linear axis's P is its L
+  bj.t_P_mm = L.delta_mm;
+  bj.conjugated = iso && !(bj.R_P.isIdentity(0.0) && bj.t_P_mm.isZero(0.0));
+  // Trans(offset) * L = [R_L | offset + delta_L]
+  bj.R_parent_loc = R_L;
+  bj.has_location_rotation = !L.eps_rad.isZero(0.0);
+  if (bj.joint->rotary)
+    for (int a = 0; a < 3; ++a)
+      if (bj.joint->direction_parent == Eigen::Vector3d::Unit(a)) bj.coordinate_axis = a;
+  bj.t_parent_loc_mm = bj.joint->offset_parent_mm + L.delta_mm;
+}
+
+Eigen::Vector3d ErrorModel::location_pivot_mm(AxisName axis) const {
+  for (const auto* chain : {&workpiece_, &tool_})
+    for (const BoundJoint& bj : *chain)
+      if (bj.joint->axis == axis && bj.independent) return bj.r_meas_mm;
+  return Eigen::Vector3d::Zero();
 }
 
 SmallTransform ErrorModel::component_errors(const BoundJoint& bj, double q, int dir) const {
@@ -290,6 +313,10 @@ void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir, To
     const double q = u[j.index];
     const Eigen::Matrix3d& R = R_e[static_cast<size_t>(n_work + k)];
     const Eigen::Vector3d& delta = delta_e[static_cast<size_t>(n_work + k)];
+    if (bj.conjugated) {  // ISO 230-1: P^-1 first
+      a.translate_back(bj.t_P_mm);
+      a.rotate_transposed(bj.R_P);
+    }
     if (j.rotary) {
       const AxisTurn turn(bj.coordinate_axis, j.direction_parent, q);
       turn.apply(n);
@@ -328,6 +355,10 @@ void ErrorModel::evaluate(const AxisVector& u, const ApproachDirections& dir, To
       a.translate_back(q * j.direction_parent);
       a.rotate_transposed(R);
     }
+    if (bj.conjugated) {  // ISO 230-1: P last
+      a.rotate(bj.R_P);
+      a.translate(bj.t_P_mm);
+    }
   }
   actual_pose.tip_mm = a.point() - machine_.workpiece_origin_mm;
   actual_pose.axis = a.direction();
@@ -349,6 +380,7 @@ PoseError ErrorModel::exact(const AxisVector& u, const ApproachDirections& dir) 
 
 void ErrorModel::levers(const AxisVector& u, std::vector<JointLever>& out) const {
   out.clear();
+  const bool iso = errors_.convention == LocationConvention::kIso230;
   const Eigen::Isometry3d T_b_w = nominal_base_to_workpiece(machine_, u);
   const Eigen::Isometry3d T_b_s = nominal_base_to_spindle(machine_, u);
   const Eigen::Vector3d tip_b = T_b_s * (-machine_.tool_length_mm * machine_.tool_axis);
@@ -381,11 +413,40 @@ void ErrorModel::levers(const AxisVector& u, std::vector<JointLever>& out) const
                                     ? Eigen::Vector3d(bj.r_meas_mm - q * j.direction_parent)
                                     : bj.r_meas_mm;
       }
+      if (iso) {
+        L.iso = true;
+        if (j.rotary) {
+          L.own = static_cast<int>(j.axis) - 3;
+          L.R_M = axis_rotation(j.direction_parent, q);
+        } else {
+          // A squareness turns the motion alone: e' x t_M, whatever the pivot.
+          L.t_M_mm = q * j.direction_parent;
+          L.lever_location_mm = L.t_M_mm;
+        }
+      }
       out.push_back(L);
     }
   };
   add(workpiece_, machine_.workpiece_chain, -1.0);
   add(tool_, machine_.tool_chain, +1.0);
+}
+
+void ErrorModel::JointLever::location_gain(int c, Eigen::Vector3d& dP, Eigen::Vector3d& dQ) const {
+  const Eigen::Vector3d e = Eigen::Vector3d::Unit(c % 3);
+  const bool conjugate = iso && c - 3 != own;
+  if (c < 3) {
+    dP = sign * (R_w_L * (conjugate ? Eigen::Vector3d(e - R_M * e) : e));
+    dQ.setZero();
+    return;
+  }
+  Eigen::Vector3d p = e.cross(lever_location_mm), a = e.cross(axis_L);
+  if (conjugate) {
+    const Eigen::Vector3d e_moved = R_M * e;
+    p -= e_moved.cross(lever_location_mm - t_M_mm);
+    a -= e_moved.cross(axis_L);
+  }
+  dP = sign * (R_w_L * p);
+  dQ = sign * (R_w_L * a);
 }
 
 PoseError ErrorModel::first_order(const AxisVector& u, const ApproachDirections& dir) const {
@@ -399,10 +460,16 @@ PoseError ErrorModel::first_order(const AxisVector& u, const ApproachDirections&
       const int i = bj.joint->index;
       const SmallTransform e = component_errors(bj, u[i], dir[static_cast<size_t>(i)]);
       const SmallTransform& loc = bj.location;
-      dv.dP_mm += L.sign * L.R_w_L *
-                  (loc.delta_mm + loc.eps_rad.cross(L.lever_location_mm) + e.delta_mm +
-                   e.eps_rad.cross(L.lever_component_mm));
-      dv.dQ += L.sign * L.R_w_L * (loc.eps_rad + e.eps_rad).cross(L.axis_L);
+      dv.dP_mm += L.sign * L.R_w_L * (e.delta_mm + e.eps_rad.cross(L.lever_component_mm));
+      dv.dQ += L.sign * L.R_w_L * e.eps_rad.cross(L.axis_L);
+      for (int c = 0; c < kComponentCount; ++c) {
+        const double value = c < 3 ? loc.delta_mm[c] : loc.eps_rad[c - 3];
+        if (value == 0.0) continue;
+        Eigen::Vector3d gP, gQ;
+        L.location_gain(c, gP, gQ);
+        dv.dP_mm += value * gP;
+        dv.dQ += value * gQ;
+      }
     }
   }
   return dv;

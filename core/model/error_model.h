@@ -104,9 +104,31 @@ class ErrorModel {
     Eigen::Vector3d lever_location_mm;   ///< for the location errors
     Eigen::Vector3d lever_component_mm;  ///< for the component errors
     Eigen::Vector3d axis_L;              ///< tool axis in frame L
+    /// ISO 230-1 location errors (LocationConvention::kIso230): the joint
+    /// is L C(q) P^-1, so a location error also acts, reversed, after the
+    /// motion M(q) = [R_M | t_M] (frame L). own: a rotary axis's own
+    /// angular component (its zero error, not in P); -1 for linear axes.
+    bool iso = false;
+    int own = -1;
+    Eigen::Matrix3d R_M = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t_M_mm = Eigen::Vector3d::Zero();
+
+    /// First-order gain of location error component c (0..2: EX0K EY0K
+    /// EZ0K per mm, 3..5: EA0K EB0K EC0K per rad), workpiece frame:
+    ///   link:  dP = sign R_w_L (e + e' x r), dQ = sign R_w_L (e' x a)
+    ///   ISO:   dP = sign R_w_L ((I - R_M) e + e' x r - (R_M e') x (r - t_M)),
+    ///          dQ = sign R_w_L ((e' - R_M e') x a)
+    /// (e: translational unit, e': angular unit, r = lever_location_mm,
+    /// a = axis_L); the zero error keeps the link form.
+    void location_gain(int c, Eigen::Vector3d& dP, Eigen::Vector3d& dQ) const;
   };
   /// Levers of every joint, workpiece chain then tool chain (base first).
   void levers(const AxisVector& u, std::vector<JointLever>& out) const;
+
+  /// The point a linear axis's squareness turns about, in its location
+  /// frame (mm): the tool tip of the measurement pose in the independent
+  /// formulation, else the frame's origin (zero; also for rotary axes).
+  Eigen::Vector3d location_pivot_mm(AxisName axis) const;
 
   /// Whether every joint is linear (a three-axis machine): tip_error_linear
   /// applies.
@@ -135,12 +157,22 @@ class ErrorModel {
     Eigen::Vector3d t_parent_loc_mm = Eigen::Vector3d::Zero();
     bool has_location_rotation = false;
     int coordinate_axis = -1;  ///< rotary line along +x, +y, +z: 0, 1, 2
+    /// ISO 230-1 (LocationConvention::kIso230): the joint is
+    /// Trans(offset) L C(q) P^-1, P = [R_P | t_P] the placement of the axis
+    /// line (L without a rotary axis's zero error). conjugated: P is not the
+    /// identity, so evaluation applies it.
+    bool conjugated = false;
+    Eigen::Matrix3d R_P = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t_P_mm = Eigen::Vector3d::Zero();
     /// Independent formulation: tool tip in this joint's location frame at
     /// the measurement pose with the joint at 0 (nominal). Zero otherwise.
     Eigen::Vector3d r_meas_mm = Eigen::Vector3d::Zero();
     bool independent = false;
   };
 
+  /// The joint's constant frames (R_parent_loc, t_parent_loc_mm, P) from
+  /// its location errors, in ISO 230-1 (iso) or link meaning.
+  static void set_location_frames(BoundJoint& bj, bool iso);
   SmallTransform component_errors(const BoundJoint& bj, double q, int dir) const;
   /// E(q) = [R | delta] of one joint (independent pivot folded into delta);
   /// identity when the joint has no component errors.
@@ -158,6 +190,8 @@ class ErrorModel {
     bool workpiece = false;
     bool independent = false;
     bool has_location_rotation = false;
+    bool conjugated = false;   ///< ISO 230-1: P = [R_loc | t_P_mm] applied
+    double t_P_mm[3] = {};     ///< t_P_mm
     double direction[3] = {};  ///< direction_parent
     double offset_mm[3] = {};  ///< offset_parent_mm
     double t_loc_mm[3] = {};   ///< t_parent_loc_mm

@@ -85,6 +85,19 @@ template <class LinearJoint>
     delta[2] -= p2 - r[2];
   }
 }
+
+// ISO 230-1's P^-1 = R_loc^T (p - t_P) of a tool-chain joint, on the tip's
+// packed rows 0, 1 and row 2 (PointDir's translate_back, rotate_transposed).
+template <class LinearJoint>
+[[gnu::always_inline]] inline void inverse_placement(const LinearJoint& J, v2d& a01, double& a2) {
+  a01 -= v2d{J.t_P_mm[0], J.t_P_mm[1]};
+  a2 -= J.t_P_mm[2];
+  const double x = a01[0], y = a01[1];
+  double r[3];
+  for (int i = 0; i < 3; ++i) r[i] = (J.R_loc[0][i] * x + J.R_loc[1][i] * y) + J.R_loc[2][i] * a2;
+  a01 = v2d{r[0], r[1]};
+  a2 = r[2];
+}
 }  // namespace
 
 Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDirections& dir,
@@ -113,6 +126,7 @@ Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDire
   for (int k = n_all - 1; k >= n_work; --k) {
     const LinearJoint& J = linear_[static_cast<size_t>(k)];
     const double q = u[J.index];
+    if (J.conjugated) inverse_placement(J, a01, a2);  // ISO 230-1: P^-1 first
     PackedRotation R;
     v2d d01;
     double d2;
@@ -188,6 +202,11 @@ Eigen::Vector3d ErrorModel::tip_error_linear(const double* u, const ApproachDire
     for (int i = 0; i < 3; ++i) a[i] -= motion[i];
     for (int i = 0; i < 3; ++i) r[i] = R(0, i) * a[0] + R(1, i) * a[1] + R(2, i) * a[2];
     for (int i = 0; i < 3; ++i) a[i] = r[i];
+    if (J.conjugated) {  // ISO 230-1: P = [R_loc | t_P] last
+      for (int i = 0; i < 3; ++i)
+        r[i] = (J.R_loc[i][0] * a[0] + J.R_loc[i][1] * a[1]) + J.R_loc[i][2] * a[2];
+      for (int i = 0; i < 3; ++i) a[i] = r[i] + J.t_P_mm[i];
+    }
   }
   return {(a[0] - linear_origin_mm_[0]) - (n[0] - linear_origin_mm_[0]),
           (a[1] - linear_origin_mm_[1]) - (n[1] - linear_origin_mm_[1]),

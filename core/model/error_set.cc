@@ -24,6 +24,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
@@ -141,6 +142,20 @@ void prepare_lookup(AxisErrorTable& table) {
         1e-12 * std::abs(step) * static_cast<double>(x.size()))
       return;
   table.uniform_inv_step = 1.0 / step;
+}
+
+const char* location_convention_name(LocationConvention c) {
+  return c == LocationConvention::kLink ? "link" : "iso230-1";
+}
+
+std::optional<LocationConvention> parse_location_convention(std::string_view text) {
+  std::string t;
+  for (char ch : text)
+    if (ch != ' ' && ch != '-' && ch != '_')
+      t += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (t == "iso2301" || t == "iso") return LocationConvention::kIso230;
+  if (t == "link") return LocationConvention::kLink;
+  return std::nullopt;
 }
 
 bool errors_all_zero(const ErrorSet& errors) {

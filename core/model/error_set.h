@@ -29,6 +29,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/common/axis_name.h"
@@ -36,6 +37,22 @@
 namespace volmap {
 
 enum class OutsidePolicy : std::uint8_t { kError, kClamp };
+
+/// What the location errors of a file mean (docs/model.md, "Location
+/// errors"):
+///  - kIso230: ISO 230-1, the contract's meaning (shared/spec/errors.md) and
+///    the default: a rotary axis turns about its actual average line, placed
+///    by its location errors, so at its zero position it moves nothing; a
+///    squareness turns the direction of a linear axis's motion, not what the
+///    axis carries.
+///  - kLink: Lei & Hsu's link errors (their eqs. 7-15, the paper's
+///    identification): a rigid offset or tilt of each axis frame relative to
+///    the frame that carries it. A file says so with `# convention: link`.
+enum class LocationConvention : std::uint8_t { kIso230, kLink };
+/// The metadata value: "iso230-1" or "link".
+const char* location_convention_name(LocationConvention c);
+/// "iso230-1" (also "iso", "ISO 230-1") or "link"; nullopt otherwise.
+std::optional<LocationConvention> parse_location_convention(std::string_view text);
 
 /// The six component errors of one axis in one approach direction, on one
 /// knot vector (the union of the knots of every component's own table; a
@@ -79,6 +96,8 @@ struct ErrorSet {
   std::array<std::optional<AxisErrors>, kAxisNameCount> axis;  ///< by AxisName
   /// Location errors by canonical name ("EC0X"), mm or rad.
   std::map<std::string, double> location;
+  /// What `location` means (metadata `# convention:`; ISO 230-1 without it).
+  LocationConvention convention = LocationConvention::kIso230;
 
   const AxisErrors* errors_of(AxisName a) const {
     const auto& e = axis[static_cast<int>(a)];

@@ -113,6 +113,14 @@ class Reader {
     if (!entry) return;
     set_.metadata[std::string(entry->key)] = std::string(entry->value);
     set_.metadata_line[std::string(entry->key)] = line;
+    if (entry->key == "convention") {
+      const std::optional<LocationConvention> c = parse_location_convention(entry->value);
+      if (!c)
+        fail(line, "unknown convention " + quoted(entry->value) +
+                       "; write `# convention: iso230-1` (the default: location errors as ISO "
+                       "230-1 defines them) or `# convention: link` (Lei & Hsu's link errors)");
+      set_.convention = *c;
+    }
   }
 
   void read_block(const std::vector<Line>& block) {

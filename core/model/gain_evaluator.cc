@@ -4,15 +4,17 @@
 
 namespace volmap {
 namespace {
-ErrorSet no_errors() {
+ErrorSet no_errors(LocationConvention convention) {
   ErrorSet none;
   none.file = "<no errors>";
+  none.convention = convention;
   return none;
 }
 }  // namespace
 
-GainEvaluator::GainEvaluator(const Machine& m, Formulation f)
-    : model_(m, no_errors(), ModelOptions{f, OutsidePolicy::kError}), names_(model_error_names(m)) {
+GainEvaluator::GainEvaluator(const Machine& m, Formulation f, LocationConvention convention)
+    : model_(m, no_errors(convention), ModelOptions{f, OutsidePolicy::kError}),
+      names_(model_error_names(m)) {
   AxisVector home = m.home;
   model_.levers(home, levers_);
   for (const std::string& name : names_) {
@@ -36,22 +38,32 @@ int GainEvaluator::index_of(const std::string& name) const {
 
 void GainEvaluator::at(const AxisVector& u) { model_.levers(u, levers_); }
 
-// Same algebra as error_gains (core/sensitivity.cc):
+// Same algebra as error_gains (core/sensitivity.cc), component errors:
 //   translational c:  dP = sign R_w_L e_c
 //   angular c:        dP = sign R_w_L (e_c x lever),  dQ = sign R_w_L (e_c x axis_L)
+// Location errors: JointLever::location_gain.
 Eigen::Vector3d GainEvaluator::dP(int k) const {
   const Entry& e = entries_[static_cast<std::size_t>(k)];
   const ErrorModel::JointLever& L = levers_[static_cast<std::size_t>(e.lever)];
+  if (e.location) {
+    Eigen::Vector3d gP, gQ;
+    L.location_gain(e.component, gP, gQ);
+    return gP;
+  }
   if (e.component < 3) return L.sign * L.R_w_L.col(e.component);
-  const Eigen::Vector3d lever = e.location ? L.lever_location_mm : L.lever_component_mm;
   const Eigen::Vector3d unit = Eigen::Vector3d::Unit(e.component - 3);
-  return L.sign * (L.R_w_L * unit.cross(lever));
+  return L.sign * (L.R_w_L * unit.cross(L.lever_component_mm));
 }
 
 Eigen::Vector3d GainEvaluator::dQ(int k) const {
   const Entry& e = entries_[static_cast<std::size_t>(k)];
-  if (e.component < 3) return Eigen::Vector3d::Zero();
   const ErrorModel::JointLever& L = levers_[static_cast<std::size_t>(e.lever)];
+  if (e.location) {
+    Eigen::Vector3d gP, gQ;
+    L.location_gain(e.component, gP, gQ);
+    return gQ;
+  }
+  if (e.component < 3) return Eigen::Vector3d::Zero();
   const Eigen::Vector3d unit = Eigen::Vector3d::Unit(e.component - 3);
   return L.sign * (L.R_w_L * unit.cross(L.axis_L));
 }

@@ -18,7 +18,9 @@ namespace volmap {
 
 class GainEvaluator {
  public:
-  GainEvaluator(const Machine& m, Formulation f);
+  /// convention: what the location errors mean (the errors file's).
+  GainEvaluator(const Machine& m, Formulation f,
+                LocationConvention convention = LocationConvention::kIso230);
 
   const std::vector<std::string>& names() const { return names_; }
   /// Index of an error name in names() (canonical or with letter O), or -1.

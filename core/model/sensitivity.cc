@@ -28,9 +28,11 @@ std::vector<std::string> model_error_names(const Machine& m) {
   return names;
 }
 
-std::vector<ErrorGain> error_gains(const Machine& m, Formulation f, const AxisVector& u) {
+std::vector<ErrorGain> error_gains(const Machine& m, Formulation f, const AxisVector& u,
+                                   LocationConvention convention) {
   ErrorSet none;
   none.file = "<no errors>";
+  none.convention = convention;
   const ErrorModel model(m, none, ModelOptions{f, OutsidePolicy::kError});
   std::vector<ErrorModel::JointLever> levers;
   model.levers(u, levers);
@@ -43,8 +45,10 @@ std::vector<ErrorGain> error_gains(const Machine& m, Formulation f, const AxisVe
     if (!L) throw std::logic_error("no joint for " + name);
     const int c = static_cast<int>(n.component);
     ErrorGain g{name, c >= 3, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
-    const Eigen::Vector3d lever = n.location ? L->lever_location_mm : L->lever_component_mm;
-    if (c < 3) {
+    const Eigen::Vector3d& lever = L->lever_component_mm;
+    if (n.location) {
+      L->location_gain(c, g.dP, g.dQ);
+    } else if (c < 3) {
       g.dP = L->sign * L->R_w_L.col(c);
     } else {
       const Eigen::Vector3d e = Eigen::Vector3d::Unit(c - 3);

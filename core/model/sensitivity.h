@@ -26,8 +26,10 @@ struct ErrorGain {
 /// tilts and its zero position (EX0C EY0C EA0C EB0C EC0C for C).
 std::vector<std::string> model_error_names(const Machine& m);
 
-/// Gains of every error of model_error_names(m) at axis position u.
-std::vector<ErrorGain> error_gains(const Machine& m, Formulation f, const AxisVector& u);
+/// Gains of every error of model_error_names(m) at axis position u, the
+/// location errors in the given meaning.
+std::vector<ErrorGain> error_gains(const Machine& m, Formulation f, const AxisVector& u,
+                                   LocationConvention convention = LocationConvention::kIso230);
 
 /// The value of every error of model_error_names(m) at u, from an error set
 /// (mm or rad; zero where the set has none). Component errors of an axis with

@@ -9,6 +9,12 @@
 
 namespace volmap::maps {
 
+namespace {
+std::optional<ErrorSet> find_errors(const VolumetricTable& table, const std::string& errors_path,
+                                    ErrorsFormat format, const std::string& table_path,
+                                    bool needed);
+}  // namespace
+
 std::vector<double> export_home(const std::string& machine_path, const VolumetricTable& table,
                                 const std::string& table_path) {
   const Machine m = load_machine_json(machine_path);
@@ -24,6 +30,23 @@ std::vector<double> export_home(const std::string& machine_path, const Volumetri
 std::optional<ErrorSet> export_errors(const VolumetricTable& table, const std::string& errors_path,
                                       ErrorsFormat format, const std::string& table_path,
                                       bool needed) {
+  std::optional<ErrorSet> e = find_errors(table, errors_path, format, table_path, needed);
+  // The controllers take location errors as ISO 230-1 defines them
+  // (docs/exports.md); a link-convention file is converted first, with its
+  // machine, by volmap convert.
+  if (e && needed && e->convention == LocationConvention::kLink && !e->location.empty())
+    throw std::invalid_argument(fmt::format(
+        "{}: its location errors are in the link convention, and the controller takes them as "
+        "ISO 230-1 defines them; convert the file first: volmap convert --machine M.json --errors "
+        "{} --to iso230-1 -o iso.csv",
+        e->file, e->file));
+  return e;
+}
+
+namespace {
+std::optional<ErrorSet> find_errors(const VolumetricTable& table, const std::string& errors_path,
+                                    ErrorsFormat format, const std::string& table_path,
+                                    bool needed) {
   if (!errors_path.empty()) return load_errors(errors_path, format);
   // The table names the errors file it was built from (as given to volmap
   // map): formats that export the component errors themselves (isg-csv,
@@ -44,5 +67,6 @@ std::optional<ErrorSet> export_errors(const VolumetricTable& table, const std::s
         table_path, table.errors_source));
   return std::nullopt;
 }
+}  // namespace
 
 }  // namespace volmap::maps

@@ -121,7 +121,7 @@ void fill_uncertainty(const ErrorModel& model, VolumetricTable& table, const Rep
   if (!channel) throw std::invalid_argument("fill_uncertainty: the table has no channel u");
   const ErrorSet& errors = model.errors();
   // sigma^2 per error of the model (0: not given in the file).
-  const GainEvaluator probe(model.machine(), model.options().formulation);
+  const GainEvaluator probe(model.machine(), model.options().formulation, errors.convention);
   std::vector<double> variance(probe.names().size(), 0.0);
   for (std::size_t k = 0; k < variance.size(); ++k) {
     const std::optional<ErrorName> n = parse_error_name(probe.names()[k]);
@@ -143,7 +143,7 @@ void fill_uncertainty(const ErrorModel& model, VolumetricTable& table, const Rep
   const std::int64_t chunks =
       std::min<std::int64_t>(thread_count(threads), std::max<std::int64_t>(1, nodes / 1024));
   auto work = [&](std::int64_t first, std::int64_t last) {
-    GainEvaluator gains(model.machine(), model.options().formulation);
+    GainEvaluator gains(model.machine(), model.options().formulation, errors.convention);
     for (std::int64_t n = first; n < last; ++n) {
       gains.at(table.node_position(n));
       double sum = 0.0;

@@ -316,6 +316,7 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
   CorrectionOptions c;
   c.max_iterations = options.correction_iterations;
   c.outer_damping = kPostOuterDamping;
+  c.iterate_below_sin = kPostIterateBelowSin;
   ToolTransforms tools(machine, options.tool_offsets_mm, [&](const Machine& m) {
     return std::make_unique<FiveAxisTransform>(m, errors, options.outside, c);
   });

@@ -30,6 +30,14 @@ namespace volmap::post {
 /// CAM); with it they post at 1 um (docs/post-five-axis.md, "Near the
 /// singular position").
 inline constexpr double kPostOuterDamping = 0.005;
+/// Within this sine of the singular position (A within 11.5 deg of 0 on an
+/// X'Y'ZA'C' machine) the post iterates the correction to eq. 4 instead of
+/// one step of eq. 6: there the outer axis turns far, and one step left up
+/// to 1.27 um on the sample with its ISO 230-1 location errors
+/// (CorrectionOptions::iterate_below_sin). The iteration keeps the damping:
+/// it converges to the damped solution, not to the undamped one whose C
+/// correction grows without bound towards A = 0 (core/correction.h).
+inline constexpr double kPostIterateBelowSin = 0.2;
 
 class FiveAxisTransform {
  public:
@@ -41,8 +49,9 @@ class FiveAxisTransform {
   /// ex ey ez ei ej ek, dv per node) instead of the model: the correction is
   /// the one step du = -J^-1 dv(u) of eq. 6 with dv interpolated (the
   /// table's own interpolation method), J the nominal Jacobian at u, solved
-  /// block-wise as CorrectionSolver does (singular: the outer axis
-  /// suppressed within |Q x w_outer| <= 1e-3); actual() is nominal + dv(u).
+  /// block-wise as CorrectionSolver does (the outer axis damped by
+  /// kPostOuterDamping, its correction fading to zero at the singular
+  /// position); actual() is nominal + dv(u).
   /// Keeps a reference to `table`. Throws std::invalid_argument when the
   /// table does not fit the machine (axis count, channels).
   FiveAxisTransform(const Machine& machine, const maps::VolumetricTable& table,

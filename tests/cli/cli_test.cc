@@ -33,9 +33,20 @@ TEST(Cli, SensitivityJsonHasTheContractKeys) {
   EXPECT_EQ(doc["gains"].size(), 21u);
   for (const char* k : {"dx", "dy", "dz", "di", "dj", "dk"})
     EXPECT_TRUE(doc["gains"]["EC0X"].contains(k));
-  // Table I, COX: dy = Xz + Xm = 0 + 250 for the sample (Xz = 0).
+  // ISO 230-1 (the default): the squareness turns X's motion, dP = EC0X x
+  // Xm: dy = Xm = 250, dx = 0.
+  EXPECT_EQ(doc["convention"], "iso230-1");
   EXPECT_NEAR(doc["gains"]["EC0X"]["dy"].get<double>(), 250.0, 1e-9);
-  EXPECT_NEAR(doc["gains"]["EC0X"]["dx"].get<double>(), 180.0, 1e-9);  // -Yz, Yz = -180
+  EXPECT_NEAR(doc["gains"]["EC0X"]["dx"].get<double>(), 0.0, 1e-9);
+  // Table I's COX is a link error: dy = Xz + Xm = 0 + 250 for the sample
+  // (Xz = 0), dx = -Yz, Yz = -180.
+  const Result link = run("sensitivity --machine " + sample("machines/hsu-3axis.json") +
+                          " --at 250,200,150 --model dependent --convention link --json");
+  ASSERT_EQ(link.status, 0) << link.err;
+  const auto l = nlohmann::json::parse(link.out);
+  EXPECT_EQ(l["convention"], "link");
+  EXPECT_NEAR(l["gains"]["EC0X"]["dy"].get<double>(), 250.0, 1e-9);
+  EXPECT_NEAR(l["gains"]["EC0X"]["dx"].get<double>(), 180.0, 1e-9);
 }
 
 TEST(Cli, SensitivityFiveAxisDefaultsToIndependent) {

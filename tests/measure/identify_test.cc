@@ -114,7 +114,9 @@ TEST(GainEvaluator, EqualsErrorGainsEverywhere) {
   }
 }
 
-TEST(Identify, RecoversSampleLinkErrorsExactlyWithoutNoise) {
+// The sphere test simulated with the sample's location errors in ISO 230-1
+// meaning (the file's, by default) and identified back in it.
+TEST(Identify, RecoversSampleLocationErrorsExactlyWithoutNoise) {
   const Machine m = machine("lei-hsu-xyzac");
   const ErrorModel truth(m, errors_from(blocks_of_sample(true)));
   const Recordings rec = simulate(truth, plan_from(two_balls(1, 0.0), m), nullptr);
@@ -176,9 +178,13 @@ TEST(Identify, WithNoiseWithinThreeStandardErrors) {
   }
 }
 
-TEST(Identify, SingleBallOnlyCRotationFlagsTheACombination) {
+/// One ball, only C turning, A at 0; the sample's location errors in the
+/// given meaning, identified in it.
+IdentifyResult single_ball_c_only(LocationConvention convention) {
   const Machine m = machine("lei-hsu-xyzac");
-  const ErrorModel truth(m, errors_from(blocks_of_sample(true)));
+  ErrorSet e = errors_from(blocks_of_sample(true));
+  e.convention = convention;
+  const ErrorModel truth(m, e);
   const Recordings rec =
       simulate(truth,
                plan_from(R"({"tests": [{"type": "probe_ball", "center_mm": [40, 0, 0],
@@ -187,7 +193,32 @@ TEST(Identify, SingleBallOnlyCRotationFlagsTheACombination) {
                nullptr);
   IdentifyOptions opt;
   opt.parameters = truth_names();
-  const IdentifyResult r = identify(m, rec, opt);
+  opt.convention = convention;
+  return identify(m, rec, opt);
+}
+
+// ISO 230-1: at A = 0 the A line's offsets and tilts move nothing, so no
+// observation sees them; the plan has to turn A.
+TEST(Identify, SingleBallOnlyCRotationSeesNoALineErrorInIso) {
+  const IdentifyResult r = single_ball_c_only(LocationConvention::kIso230);
+  for (const char* name : {"EY0A", "EZ0A", "EB0A", "EC0A"}) {
+    EXPECT_FALSE(param(r, name).identifiable) << name;
+    bool named = false;
+    for (const UnidentifiableCombination& u : r.unidentifiable) {
+      if (u.fixed != name) continue;
+      named = true;
+      EXPECT_EQ(u.terms.size(), 1u) << u.text;
+      EXPECT_NE(u.explanation.find("no observation is sensitive"), std::string::npos);
+      EXPECT_NE(u.remedy.find("move A"), std::string::npos) << u.remedy;
+    }
+    EXPECT_TRUE(named) << name;
+  }
+}
+
+// Link errors: the A line's y offset moves the C line with it when A stands
+// at 0, so EY0A acts exactly like EY0C.
+TEST(Identify, SingleBallOnlyCRotationFlagsTheACombination) {
+  const IdentifyResult r = single_ball_c_only(LocationConvention::kLink);
   EXPECT_LT(r.rank, 12);
   // EY0A (the A line's y offset) acts exactly like EY0C when A stands at 0.
   const IdentifiedParameter& ey0a = param(r, "EY0A");
@@ -224,13 +255,31 @@ TEST(Identify, SingleBallOnlyCRotationFlagsTheACombination) {
   EXPECT_TRUE(in_json);
 }
 
-TEST(Identify, RedundantNamesAreFlaggedAsSuch) {
-  // EA0A (A zero) and EA0C (C tilt about x) are one error motion: every
-  // location error of the model, the default, contains the pair.
+TEST(Identify, EveryIsoLocationErrorIsIdentifiable) {
   const Machine m = machine("lei-hsu-xyzac");
   const ErrorModel truth(m, errors_from(blocks_of_sample(true)));
   const Recordings rec = simulate(truth, plan_from(two_balls(1, 0.0), m), nullptr);
   const IdentifyResult r = identify(m, rec, IdentifyOptions{});
+  for (const UnidentifiableCombination& u : r.unidentifiable) ADD_FAILURE() << u.text;
+  for (const auto& [name, value] : kTruth) EXPECT_NEAR(param(r, name).estimate, value, 1e-6);
+  EXPECT_NEAR(param(r, "EA0A").estimate, 0.0, 1e-6);
+  EXPECT_NEAR(param(r, "EC0C").estimate, 0.0, 1e-6);
+}
+
+TEST(Identify, RedundantNamesAreFlaggedAsSuch) {
+  // Link errors: EA0A (A zero) and EA0C (C tilt about x) are one error
+  // motion (the C frame turned about x moves like A's zero): every location
+  // error of the model, the default, contains the pair. In ISO 230-1 the C
+  // line's tilt turns about the actual line and moves nothing at C = 0, so
+  // the two differ (Identify.EveryIsoLocationErrorIsIdentifiable).
+  const Machine m = machine("lei-hsu-xyzac");
+  ErrorSet e = errors_from(blocks_of_sample(true));
+  e.convention = LocationConvention::kLink;
+  const ErrorModel truth(m, e);
+  const Recordings rec = simulate(truth, plan_from(two_balls(1, 0.0), m), nullptr);
+  IdentifyOptions opt;
+  opt.convention = LocationConvention::kLink;
+  const IdentifyResult r = identify(m, rec, opt);
   ASSERT_EQ(r.unidentifiable.size(), 1u);
   EXPECT_EQ(r.unidentifiable[0].fixed, "EA0A");
   EXPECT_NE(r.unidentifiable[0].explanation.find("redundancy of the parameter set"),

@@ -121,23 +121,33 @@ TEST(Simulate, LaserRunPositionsDirectionsTimeAndRuns) {
 
 TEST(Simulate, GeometricPartMatchesHandDerivedCAxisOffset) {
   // Only EX0C = 10 um: the C line is displaced by +10 um in x of the
-  // (non-rotating) A frame; at A = 0 the workpiece moves +10 um in base x,
-  // the tool relative to it -10 um; in workpiece coordinates (Rz(C)^T):
-  // ex = -10 cos C, ey = +10 sin C, ez = 0.
+  // (non-rotating) A frame, c = (10, 0, 0) um.
+  //  - ISO 230-1: the part turns by C about the displaced line, a part
+  //    point goes to c + R(p - c) instead of R p: it moves by (I - R) c, the
+  //    tool relative to it by -(I - R) c; in workpiece coordinates
+  //    (R^T = Rz(-C)): R^T c - c, so ex = 10 - 10 cos C, ey = 10 sin C.
+  //  - link errors: the part moves with the line, +10 um in base x at
+  //    A = 0; the tool relative to it in workpiece coordinates: -R^T c,
+  //    ex = -10 cos C, ey = +10 sin C.
   const Machine m = machine("lei-hsu-xyzac");
-  const ErrorModel model(m, errors_from("EX0C\n10\n"));
-  const Recordings r =
-      simulate(model,
-               plan_from(R"({"tests": [{"type": "probe_ball", "center_mm": [40, 10, 30],
+  for (LocationConvention convention : {LocationConvention::kIso230, LocationConvention::kLink}) {
+    ErrorSet e = errors_from("EX0C\n10\n");
+    e.convention = convention;
+    const ErrorModel model(m, e);
+    const Recordings r =
+        simulate(model,
+                 plan_from(R"({"tests": [{"type": "probe_ball", "center_mm": [40, 10, 30],
       "a_deg": 0, "c_deg": {"from": 0, "to": 330, "step": 30}}]})",
-                         m),
-               nullptr);
-  ASSERT_EQ(r.size(), 12u);
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    const double c = r.position[5][i];
-    EXPECT_NEAR(r.e_um[0][i], -10.0 * std::cos(c), 1e-9);
-    EXPECT_NEAR(r.e_um[1][i], 10.0 * std::sin(c), 1e-9);
-    EXPECT_NEAR(r.e_um[2][i], 0.0, 1e-9);
+                           m),
+                 nullptr);
+    ASSERT_EQ(r.size(), 12u);
+    const double iso = convention == LocationConvention::kIso230 ? 10.0 : 0.0;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const double c = r.position[5][i];
+      EXPECT_NEAR(r.e_um[0][i], iso - 10.0 * std::cos(c), 1e-9);
+      EXPECT_NEAR(r.e_um[1][i], 10.0 * std::sin(c), 1e-9);
+      EXPECT_NEAR(r.e_um[2][i], 0.0, 1e-9);
+    }
   }
 }
 

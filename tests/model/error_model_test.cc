@@ -206,17 +206,28 @@ TEST(Sensitivity, GainsAreTheDerivativeOfTheExactModel) {
 }
 
 TEST(Sensitivity, FiveAxisRotaryLocationErrorByHand) {
-  // C axis offset EX0C moves the C line (not the part) by +EX0C in X of the A
-  // frame; at A = 0, C = 0 the part moves with it, so the tool tip, relative
-  // to the part, moves by -EX0C in workpiece X.
+  // C axis offset EX0C moves the C line by +EX0C in X of the A frame.
+  // Link errors move the C frame, and the part with it: at A = 0, C = 0 the
+  // tool tip, relative to the part, moves by -EX0C in workpiece X.
+  // ISO 230-1: the part turns about the displaced line, so at C = 0 nothing
+  // moves; at C = 90 deg a part point p goes to c + R (p - c) instead of R p,
+  // moved by (I - R) c = (1, -1) per unit of c = (1, 0) in the A frame; the
+  // tool relative to the part: (-1, 1), in workpiece axes (turned by C)
+  // R^T (-1, 1) = (1, 1).
   const Machine m = lei_hsu();
   AxisVector u(5);
   u << 10, 20, 30, 0, 0;
+  auto ex0c = [&](LocationConvention c) {
+    for (const ErrorGain& g : error_gains(m, Formulation::kDependent, u, c))
+      if (g.name == "EX0C") return g.dP;
+    return Eigen::Vector3d(Eigen::Vector3d::Constant(NAN));
+  };
+  EXPECT_NEAR((ex0c(LocationConvention::kLink) - Eigen::Vector3d(-1, 0, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR(ex0c(LocationConvention::kIso230).norm(), 0, 1e-12);
+  u[4] = M_PI / 2;
+  EXPECT_NEAR((ex0c(LocationConvention::kIso230) - Eigen::Vector3d(1, 1, 0)).norm(), 0, 1e-12);
+  u[4] = 0;
   for (const ErrorGain& g : error_gains(m, Formulation::kDependent, u)) {
-    if (g.name == "EX0C") {
-      EXPECT_NEAR(g.dP.x(), -1.0, 1e-12);
-      EXPECT_NEAR(g.dP.y(), 0.0, 1e-12);
-    }
     if (g.name == "ECC") {  // C positioning error: rotates the part about C
       // tool tip in the C frame at u: (-10, -20, 30 - 50) -> dP = -e_z x r
       EXPECT_NEAR(g.dP.x(), -20.0, 1e-9);

@@ -262,6 +262,7 @@ TEST_P(BadInput, ReportsFileLineAndWhatToDo) {
 std::vector<BadCase> bad_cases() {
   return {
       BadCase{"unknown_name.csv", 1, {"unknown error name", "'EQX'"}},
+      BadCase{"unknown_convention.csv", 2, {"unknown convention", "'lei-hsu'", "iso230-1", "link"}},
       BadCase{"wrong_axis.csv", 2, {"EYY", "belongs to the Y axis", "X axis"}},
       BadCase{"not_increasing.csv", 4, {"strictly increasing", "100", "line 3"}},
       BadCase{"not_increasing_dir.csv", 6, {"strictly increasing", "dir=-1", "40", "line 5"}},

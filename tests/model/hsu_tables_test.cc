@@ -67,7 +67,11 @@ std::map<std::string, ErrorGain> gains_at(const Machine& m, Formulation f, const
   AxisVector u(3);
   u << s.Xm, s.Ym, s.Zm;
   std::map<std::string, ErrorGain> out;
-  for (const ErrorGain& g : error_gains(m, f, u)) out[g.name] = g;
+  // Hsu's tables are written in link errors: his squareness errors tilt the
+  // frame of the axis, and what it carries with it (EB0Z tilts the tool:
+  // its di is 1). ISO 230-1's squareness turns the motion alone
+  // (docs/model.md, "Location errors"; tests/model/iso_location_test.cc).
+  for (const ErrorGain& g : error_gains(m, f, u, LocationConvention::kLink)) out[g.name] = g;
   return out;
 }
 

@@ -286,6 +286,56 @@ TEST(FiveAxisPost, CNeverJumpsHalfATurn) {
   }
 }
 
+// Near the singular position the post's correction (damped C, iterated) is
+// the damped solution of eq. 4: the tip exact, the gradient of
+// |dQ_left|^2 + lambda^2 dC^2 zero, |dC| within |dQ| / (2 lambda), and
+// continuous down to A = 0. The plain chord-Newton iteration converged
+// towards the undamped solution instead (dC = -dQ_perp / sin A, 75 mrad at
+// A = 0.07 deg for the 134 urad that only C can turn at C = -603 deg, the
+// pose i = 100 above), unconverged after 20 iterations, and C's correction
+// then jumped to 0 at the singular threshold: more than 65536 pieces.
+TEST(FiveAxisPost, CorrectionNearTheSingularPositionIsDampedAndContinuous) {
+  const Machine m = test::sample_machine("lei-hsu-xyzac");
+  const ErrorModel model(m, test::sample_errors("lei-hsu-xyzac"));
+  CorrectionOptions o;
+  o.outer_damping = post::kPostOuterDamping;
+  o.iterate_below_sin = post::kPostIterateBelowSin;
+  const CorrectionSolver solver(model, o);
+  const post::FiveAxisTransform tf(m, test::sample_errors("lei-hsu-xyzac"), OutsidePolicy::kError,
+                                   o);
+  const double lambda = post::kPostOuterDamping;
+  double prev_dc = 0;
+  for (int k = 0; k <= 400; ++k) {
+    const double a = (0.4 - 0.001 * k) * kDeg;
+    SCOPED_TRACE(a / kDeg);
+    AxisVector q = AxisVector::Zero(5);
+    q[3] = a;
+    q[4] = -603 * kDeg;
+    const AxisVector u = tf.axes_for_angles(q, Vector3d(-11.943172, -16.042464, 10));
+    PoseJacobian J;
+    const ToolPose v = nominal_forward_jacobian(m, u, J);
+    const CorrectionResult r = solver.correct(u);
+    EXPECT_LT(r.iterations, CorrectionOptions::kNearSingularIterations);
+    const ToolPose act = model.actual(u + r.du);
+    EXPECT_LT((act.tip_mm - v.tip_mm).norm(), 1e-9);
+    Eigen::Matrix<double, 3, 2> G;
+    G.col(0) = J.block<3, 1>(3, 4);
+    G.col(1) = J.block<3, 1>(3, 3);
+    const Eigen::Vector2d grad =
+        G.transpose() * (act.axis - v.axis) + Eigen::Vector2d(lambda * lambda * r.du[4], 0.0);
+    EXPECT_LT(grad.norm(), 1e-11);
+    EXPECT_LE(std::abs(r.du[4]), (model.actual(u).axis - v.axis).norm() / (2 * lambda) * 1.01);
+    // Lipschitz in sin A with constant |dQ| / lambda^2 (the damped dC =
+    // sin A dQ_perp / (sin^2 A + lambda^2)); 0.001 deg of A: < 0.1 mrad.
+    if (k > 0) {
+      EXPECT_LT(std::abs(r.du[4] - prev_dc),
+                1.1 * (model.actual(u).axis - v.axis).norm() * 0.001 * kDeg / (lambda * lambda));
+    }
+    prev_dc = r.du[4];
+  }
+  EXPECT_LT(std::abs(prev_dc), 1e-12);  // at A = 0 C's correction vanishes
+}
+
 // With the sample errors: every written position, run through the model,
 // puts the tool on the nominal path (tip within the tolerance plus the
 // rounding of the written numbers), and each programmed end point within
