@@ -22,6 +22,18 @@ ErrorSet sample_errors(const std::string& name) {
   return load_errors_csv(test::source_path("samples/errors/" + name + ".csv"));
 }
 
+/// One link error on its own, and its conversion to ISO 230-1 on the
+/// lei-hsu sample.
+ErrorSet one_link_error(const std::string& name, double value) {
+  ErrorSet link;
+  link.convention = LocationConvention::kLink;
+  link.location[name] = value;
+  return link;
+}
+ConventionConversion to_iso(const Machine& m, const ErrorSet& e) {
+  return convert_location_convention(m, e, LocationConvention::kIso230, Formulation::kIndependent);
+}
+
 // ISO -> link -> ISO gives every location error back, and the two models
 // with the set-up parts agree up to the second-order product of the shift
 // along a line and a component error's rotation (nanometres).
@@ -56,11 +68,8 @@ TEST(LocationConvention, RoundTripOnEverySample) {
 // offset of the line plus the part set up 28 um further in x.
 TEST(LocationConvention, SetUpPartByHand) {
   const Machine m = sample_machine("lei-hsu-xyzac");
-  ErrorSet link;
-  link.convention = LocationConvention::kLink;
-  link.location["EX0C"] = 28e-3;
-  const ConventionConversion r =
-      convert_location_convention(m, link, LocationConvention::kIso230, Formulation::kIndependent);
+  const ErrorSet link = one_link_error("EX0C", 28e-3);
+  const ConventionConversion r = to_iso(m, link);
   EXPECT_NEAR(r.errors.location_error("EX0C"), 28e-3, 1e-15);
   EXPECT_EQ(r.errors.location.size(), 1u);
   EXPECT_LT((r.workpiece_setup.translation() - Eigen::Vector3d(28e-3, 0, 0)).norm(), 1e-15);
@@ -78,12 +87,8 @@ TEST(LocationConvention, SetUpPartByHand) {
 // turns what X carries (the A and C tables); in ISO meaning that part goes
 // to the rotary axes' lines and the set-up.
 TEST(LocationConvention, SquarenessOfATableCarryingAxis) {
-  const Machine m = sample_machine("lei-hsu-xyzac");
-  ErrorSet link;
-  link.convention = LocationConvention::kLink;
-  link.location["EC0X"] = 10e-6;
   const ConventionConversion r =
-      convert_location_convention(m, link, LocationConvention::kIso230, Formulation::kIndependent);
+      to_iso(sample_machine("lei-hsu-xyzac"), one_link_error("EC0X", 10e-6));
   EXPECT_NEAR(r.errors.location_error("EC0X"), 10e-6, 1e-15);
   // The A line (along x) turned 10 urad about z: EC0A.
   EXPECT_NEAR(r.errors.location_error("EC0A"), 10e-6, 1e-12);
