@@ -1,4 +1,4 @@
-// volmap identify: location (link) and squareness errors, optionally
+// volmap identify: location errors (ISO 230-1 or link) and squareness, optionally
 // component-error curves, from recordings (docs/identify.md).
 #include <fmt/format.h>
 
@@ -47,8 +47,8 @@ Runner register_identify(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand(
       "identify",
-      "Least-squares identification of location (link) and squareness errors, optionally "
-      "component-error curves, from recordings; writes an errors CSV");
+      "Least-squares identification of location and squareness errors (ISO 230-1 meaning, or "
+      "link errors), optionally component-error curves, from recordings; writes an errors CSV");
   sub->add_option("--machine", o->machine, "Machine definition (JSON, docs/machine-format.md)")
       ->required();
   sub->add_option("--recordings", o->recordings, "Recordings CSV (recordings.md)")->required();
