@@ -136,6 +136,7 @@ Runner register_identify(CLI::App& app) {
     if (o->json) {
       nlohmann::ordered_json doc = identify_report_json(res);
       doc["recordings"] = o->recordings;
+      doc["convention"] = o->convention;
       doc["output"] = o->output;
       report << doc.dump(2) << "\n";
       // The JSON carries them; a script that reads only the status sees them here.

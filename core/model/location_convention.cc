@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -16,6 +17,10 @@ namespace volmap {
 namespace {
 
 using Iso = Eigen::Isometry3d;
+
+// The largest location errors convert takes: 10 mm, 10 mrad.
+constexpr double kLargestShiftMm = 10.0;
+constexpr double kLargestAngleRad = 1e-2;
 
 Iso make(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   Iso T = Iso::Identity();
@@ -38,15 +43,20 @@ Eigen::Matrix3d form_rotation(const Eigen::Vector3d& x, int own, const Eigen::Ve
 
 /// The angles x with form_rotation(x, own, w) = R, for a rotation near the
 /// identity: fixed-point steps on the body-frame residual, each shrinking it
-/// by a factor of the angles' size.
+/// by a factor of the angles' size. Throws std::invalid_argument when the
+/// rotation is no small error (the steps do not converge).
 Eigen::Vector3d decompose(const Eigen::Matrix3d& R, int own, const Eigen::Vector3d& w) {
   Eigen::Vector3d x = vee_skew(R);
   for (int it = 0; it < 50; ++it) {
     const Eigen::Vector3d r = vee_skew(form_rotation(x, own, w).transpose() * R);
     x += r;
-    if (r.norm() < 1e-18) break;
+    if (r.norm() < 1e-18) return x;
   }
-  return x;
+  if (x.allFinite() && (form_rotation(x, own, w) - R).norm() < 1e-15) return x;
+  throw std::invalid_argument(fmt::format(
+      "location errors of {:.3g} rad do not convert: the conversion is for small errors (a few "
+      "mrad at most); check the file's units (µm and µrad)",
+      vee_skew(R).norm()));
 }
 
 /// One joint's location errors: translation (mm) and angles (rad).
@@ -184,6 +194,19 @@ ConventionConversion convert_location_convention(const Machine& m, const ErrorSe
   r.errors = errors;
   r.errors.convention = target;
   if (errors.convention == target) return r;
+  // Small errors only: the decomposition and the set-up part assume them.
+  for (const auto& [name, value] : errors.location) {
+    const std::optional<ErrorName> n = parse_error_name(name);
+    const bool angular = n && is_angular(n->component);
+    if (std::abs(value) > (angular ? kLargestAngleRad : kLargestShiftMm))
+      throw std::invalid_argument(fmt::format(
+          "{}: {} = {:g} {} is no small location error; the conversion takes at most {:g} {}: "
+          "check the file's units (µm, µrad)",
+          errors.file, name, value * (angular ? units::kUradPerRad : units::kUmPerMm),
+          angular ? "µrad" : "µm",
+          (angular ? kLargestAngleRad * units::kUradPerRad : kLargestShiftMm * units::kUmPerMm),
+          angular ? "µrad" : "µm"));
+  }
   // Binds the errors (refuses an axis the machine lacks) and gives the pivots.
   const ErrorModel model(m, errors, ModelOptions{formulation, OutsidePolicy::kClamp});
   r.workpiece_setup = convert_chain(m.workpiece_chain, model, errors, target, r.errors);

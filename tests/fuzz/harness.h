@@ -22,6 +22,7 @@
 #include "core/measure/recordings.h"
 #include "core/model/errors_csv.h"
 #include "core/model/errors_import.h"
+#include "core/model/location_convention.h"
 #include "core/model/machine_json.h"
 #include "gcode/nc_block.h"
 #include "gcode/nc_interpreter.h"
@@ -185,10 +186,25 @@ inline void recordings_csv(std::string_view text) {
 /// The errors readers: errors.md CSV and, by format detection, ISG CSV and
 /// the Etalon exchange format.
 inline void errors_csv(std::string_view text) {
+  static const Machine machine =
+      load_machine_json(std::string(VOLMAP_SOURCE_DIR) + "/samples/machines/lei-hsu-xyzac.json");
   std::istringstream in{std::string(text)};
+  ErrorSet errors;
   try {
-    (void)read_errors(in, "fuzz.csv", ErrorsFormat::kAuto);
+    errors = read_errors(in, "fuzz.csv", ErrorsFormat::kAuto);
   } catch (const InputError&) {
+    return;
+  }
+  // What was read converts between the location errors' meanings, or is
+  // refused (an axis the machine lacks, errors too large to be small).
+  for (LocationConvention to : {LocationConvention::kIso230, LocationConvention::kLink}) {
+    try {
+      const ConventionConversion r =
+          convert_location_convention(machine, errors, to, Formulation::kIndependent);
+      for (const auto& [name, value] : r.errors.location) require(std::isfinite(value));
+    } catch (const std::invalid_argument&) {
+    } catch (const std::out_of_range&) {
+    }
   }
 }
 

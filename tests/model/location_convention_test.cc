@@ -95,6 +95,15 @@ TEST(LocationConvention, SquarenessOfATableCarryingAxis) {
   EXPECT_LT(r.check_tip_mm, 1e-12);
 }
 
+// Errors that are no small errors (a unit mistake) are refused, not
+// decomposed into garbage.
+TEST(LocationConvention, LargeErrorsAreRefused) {
+  const Machine m = sample_machine("lei-hsu-xyzac");
+  EXPECT_THROW(to_iso(m, one_link_error("EX0C", 200.0)), std::invalid_argument);
+  EXPECT_THROW(to_iso(m, one_link_error("EA0C", 0.5)), std::invalid_argument);
+  EXPECT_NO_THROW(to_iso(m, one_link_error("EA0C", 5e-3)));
+}
+
 TEST(LocationConvention, FileSaysItsConvention) {
   std::istringstream link("# volmap component errors v1\n# convention: link\n\nEX0C\n28\n");
   EXPECT_EQ(read_errors_csv(link, "l.csv").convention, LocationConvention::kLink);
