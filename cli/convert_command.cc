@@ -50,7 +50,7 @@ std::string location_blocks(const Machine& m, const ErrorSet& converted) {
 }
 
 /// The input's text with its `# convention:` line and location blocks
-/// replaced: every other line as it was.
+/// (and the comments inside them) replaced: every other line as it was.
 std::string rewrite(const std::string& input, const Machine& m, const ErrorSet& converted) {
   const std::vector<std::string> lines = csv::split_lines(input);
   std::string head, body;
@@ -59,13 +59,15 @@ std::string rewrite(const std::string& input, const Machine& m, const ErrorSet& 
   for (const std::string& line : lines) {
     if (csv::is_blank(line)) {
       in_block = false;
+      drop_block = false;
       if (seen_block) pending_blank = "\n";
       continue;
     }
     if (csv::is_comment(line)) {
+      const auto meta = csv::parse_metadata_comment(csv::trim(line));
+      if (meta && meta->key == "convention") continue;  // written anew
       if (!seen_block) {
-        const auto meta = csv::parse_metadata_comment(csv::trim(line));
-        if (!(meta && meta->key == "convention")) head += line + "\n";
+        head += line + "\n";
       } else if (!drop_block) {
         body += pending_blank + line + "\n";
         pending_blank.clear();
@@ -83,6 +85,7 @@ std::string rewrite(const std::string& input, const Machine& m, const ErrorSet& 
   }
   std::string out = head;
   out += fmt::format("# convention: {}\n", location_convention_name(converted.convention));
+  if (body.starts_with("\n")) body.erase(0, 1);
   return out + "\n" + body + location_blocks(m, converted);
 }
 
@@ -166,8 +169,8 @@ Runner register_convert(CLI::App& app) {
         "Location errors converted from {} to {}.\n"
         "The link model is the ISO 230-1 model with the workpiece and the spindle set up "
         "differently (last frame of each chain):\n"
-        "  workpiece: {}  (what probing the part's origin absorbs)\n"
-        "  spindle:   {}  (the tool's length and the spindle's alignment)\n"
+        "  workpiece: {}  (probe the part's origin and alignment again)\n"
+        "  spindle:   {}  (measure the tool and the spindle's alignment again)\n"
         "Check: the two models with these set-up parts differ by at most {:.6f} µm at the tool "
         "tip and {:.6f} µrad in the tool axis over {} poses.\n",
         location_convention_name(errors.convention), location_convention_name(to),

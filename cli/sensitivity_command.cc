@@ -145,17 +145,19 @@ Runner register_sensitivity(CLI::App& app) {
   sub->add_option("--errors", o->errors,
                   "Errors CSV (errors.md): adds each error's value and its contribution "
                   "to the tool-tip error at --at, and the total (first order and exact)");
-  sub->add_option("--convention", o->convention,
-                  "Meaning of the location errors' gains without --errors: iso230-1 (default) or "
-                  "link (with --errors: the file's)")
-      ->check(CLI::IsMember({"iso230-1", "link"}));
+  CLI::Option* sub_convention =
+      sub->add_option(
+             "--convention", o->convention,
+             "Meaning of the location errors' gains without --errors: iso230-1 (default) or "
+             "link (with --errors: the file's)")
+          ->check(CLI::IsMember({"iso230-1", "link"}));
   add_other_machine_flag(*sub, o->other_machine_errors);
   sub->add_flag("--json", o->json, "Write one JSON document to stdout");
   sub->footer(
       "Example:\n  volmap sensitivity --machine samples/machines/hsu-3axis.json "
       "--at 250,200,150 --model dependent --json");
 
-  return [o]() -> int {
+  return [o, sub_convention]() -> int {
     const Machine m = load_machine_json(o->machine);
     const AxisVector u = parse_axis_position(m, o->at, "--at");
     const Formulation f =
@@ -170,6 +172,11 @@ Runner register_sensitivity(CLI::App& app) {
           load_errors_for(m, o->machine, o->errors, ErrorsFormat::kVolmap, o->other_machine_errors),
           ModelOptions{f, OutsidePolicy::kError});
       r.values = error_values(m, r.model->errors(), u, OutsidePolicy::kError);
+      if (sub_convention->count() > 0 && r.model->errors().convention != convention)
+        throw UsageError(fmt::format(
+            "--convention {}: {} gives its location errors in the {} convention; leave "
+            "--convention out (the file's meaning is used), or convert the file (volmap convert)",
+            o->convention, o->errors, location_convention_name(r.model->errors().convention)));
       convention = r.model->errors().convention;
     }
     r.gains = error_gains(m, f, u, convention);

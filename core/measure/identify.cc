@@ -243,13 +243,14 @@ ComponentFitError::ComponentFitError(const std::string& detail)
     : std::invalid_argument("component " + detail), detail_(detail) {}
 
 IdentifyResult identify(const Machine& m, const Recordings& rec, const IdentifyOptions& opt) {
-  if (opt.known && opt.known->convention != opt.convention)
+  if (opt.known && !opt.known->location.empty() && opt.known->convention != opt.convention)
     throw std::invalid_argument(fmt::format(
         "{} gives its location errors in the {} convention, and they are to be identified in the "
-        "{} convention; convert the file first (volmap convert --to {}), or identify in its "
-        "convention",
+        "{} convention; convert the file first (volmap convert --machine M.json --errors {} --to "
+        "{} -o K2.csv), or identify with --convention {}",
         opt.known->file, location_convention_name(opt.known->convention),
-        location_convention_name(opt.convention), location_convention_name(opt.convention)));
+        location_convention_name(opt.convention), opt.known->file,
+        location_convention_name(opt.convention), location_convention_name(opt.known->convention)));
   GainEvaluator gains(m, opt.formulation, opt.convention);
   ErrorSet base;
   if (opt.known) base = *opt.known;

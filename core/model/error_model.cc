@@ -433,7 +433,7 @@ void ErrorModel::levers(const AxisVector& u, std::vector<JointLever>& out) const
 
 void ErrorModel::JointLever::location_gain(int c, Eigen::Vector3d& dP, Eigen::Vector3d& dQ) const {
   const Eigen::Vector3d e = Eigen::Vector3d::Unit(c % 3);
-  const bool conjugate = iso && c - 3 != own;
+  const bool conjugate = iso && !(own >= 0 && c - 3 == own);
   if (c < 3) {
     dP = sign * (R_w_L * (conjugate ? Eigen::Vector3d(e - R_M * e) : e));
     dQ.setZero();

@@ -106,11 +106,15 @@ Values split(const JointShape& s, const Iso& G, LocationConvention c, Iso& N) {
     N = make(Eigen::Matrix3d::Identity(), shift * d);
     return v;
   }
-  v.x = decompose(G.linear(), s.own, d);
+  // The turn about the axis's own line (about +e_own, whatever the sign of
+  // d: it commutes with Trans(q d) either way) goes to N.
+  const Eigen::Vector3d e_own = Eigen::Vector3d::Unit(s.own);
+  v.x = decompose(G.linear(), s.own, e_own);
   const double roll = v.x[s.own];
   v.x[s.own] = 0.0;
   const Iso L = location_of(s, v, c);
-  N = make(axis_rotation(d, roll), L.linear().transpose() * (G.translation() - L.translation()));
+  N = make(axis_rotation(e_own, roll),
+           L.linear().transpose() * (G.translation() - L.translation()));
   return v;
 }
 
@@ -130,7 +134,8 @@ void store(ErrorSet& e, AxisName a, const Values& v) {
     e.location.erase(name);
     if (location_error_problem(n)) continue;
     const double value = c < 3 ? v.t[c] : v.x[c - 3];
-    if (std::abs(value) > 1e-15) e.location[name] = value;
+    // Written with 1e-6 um / urad: what rounds to zero there is left out.
+    if (std::abs(value) >= 5e-13) e.location[name] = value;
   }
 }
 

@@ -15,8 +15,9 @@
 //   spindle's alignment).
 // The conversion is exact for the location errors. N and a component error's
 // rotation do not commute exactly: their product, second order (a shift of
-// tens of um times an error rotation of tens of urad: picometres), is the
-// only difference left; convert() measures it on a grid of poses.
+// tens of um times an error rotation of tens of urad: below 1.1 nm on every
+// sample), is the only difference left; convert() measures it on a grid of
+// poses. Towards link errors the joint takes from A^-1 K^-1 A L'.
 #pragma once
 
 #include <Eigen/Geometry>

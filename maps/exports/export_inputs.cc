@@ -37,8 +37,8 @@ std::optional<ErrorSet> export_errors(const VolumetricTable& table, const std::s
   if (e && needed && e->convention == LocationConvention::kLink && !e->location.empty())
     throw std::invalid_argument(fmt::format(
         "{}: its location errors are in the link convention, and the controller takes them as "
-        "ISO 230-1 defines them; convert the file first: volmap convert --machine M.json --errors "
-        "{} --to iso230-1 -o iso.csv",
+        "ISO 230-1 defines them; convert the file (volmap convert --machine M.json --errors {} "
+        "--to iso230-1 -o iso.csv), build the table again from it (volmap map), and export that",
         e->file, e->file));
   return e;
 }

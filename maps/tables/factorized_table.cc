@@ -92,6 +92,7 @@ std::string factorized_json(const FactorizedTable& t) {
   }
   doc["component_errors"] = std::move(axes);
   doc["location_errors"] = t.errors.location;
+  doc["location_convention"] = location_convention_name(t.errors.convention);
   return doc.dump(1) + "\n";
 }
 
@@ -139,6 +140,16 @@ FactorizedTable read_factorized(std::istream& in, const std::string& file) {
     }
     where = "/location_errors";
     t.errors.location = doc.at("location_errors").get<std::map<std::string, double>>();
+    // Written since the location errors mean ISO 230-1 (2026-12-03); a file
+    // without it was written when they meant link errors.
+    where = "/location_convention";
+    t.errors.convention = LocationConvention::kLink;
+    if (doc.contains("location_convention")) {
+      const std::optional<LocationConvention> c =
+          parse_location_convention(doc.at("location_convention").get<std::string>());
+      if (!c) throw std::invalid_argument("location_convention is neither iso230-1 nor link");
+      t.errors.convention = *c;
+    }
     where = "/machine_definition";
     (void)factorized_model(t);  // validates the machine and binds the errors
     return t;

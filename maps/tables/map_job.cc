@@ -33,6 +33,15 @@ UncertaintySources uncertainty_sources(const ErrorSet& errors, double repeatabil
     } catch (const nlohmann::json::parse_error& e) {
       throw std::invalid_argument(fmt::format("{}: not JSON ({})", covariance_path, e.what()));
     }
+    // The report's parameters are location errors in its convention (ISO
+    // 230-1 when it does not say: identify wrote it so since 2026-12-03).
+    const std::string convention = report.value("convention", "iso230-1");
+    if (parse_location_convention(convention) != errors.convention)
+      throw std::invalid_argument(fmt::format(
+          "{}: identified in the {} convention, and {} gives its location errors in the {} "
+          "convention; identify again with --convention {}, or give the errors file it wrote",
+          covariance_path, convention, errors.file, location_convention_name(errors.convention),
+          location_convention_name(errors.convention)));
     s.covariance = covariance_from_identify(report, m, f, covariance_path);
     if (!s.repeatability) s.repeatability.emplace();
   }

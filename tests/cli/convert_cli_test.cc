@@ -67,19 +67,24 @@ TEST(ConvertCli, RoundTripKeepsEveryOtherLine) {
   EXPECT_EQ(doc["to"], "link");
   EXPECT_LT(doc["check"]["tip_um"].get<double>(), 2e-3);
   EXPECT_EQ(doc["check"]["poses"], 243);
-  // The workpiece set-up: the C line's offsets, 28 and -40 um (docs/model.md).
-  EXPECT_NEAR(doc["workpiece_setup"]["shift_um"][0].get<double>(), 28.0, 0.01);
-  EXPECT_NEAR(doc["workpiece_setup"]["shift_um"][1].get<double>(), -40.0, 0.01);
+  // The workpiece set-up, to first order: the last rotary axis's placement
+  // (the C line's offsets EX0C 28, EY0C -40 um and tilts EA0C 80, EB0C -35
+  // urad), shifted along the C line by the A line's offset EZ0A (-22 um);
+  // the rest is second order (below 0.01).
+  const nlohmann::json& w = doc["workpiece_setup"];
+  const double shift[3] = {28.0, -40.0, -22.0}, turn[2] = {80.0, -35.0};
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(w["shift_um"][i].get<double>(), shift[i], 0.01) << i;
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(w["turn_urad"][i].get<double>(), turn[i], 0.01) << i;
   const std::string link_text = slurp(link);
   EXPECT_NE(link_text.find("# convention: link\n"), std::string::npos);
   const std::vector<std::string> components = component_lines(link_text);
-  EXPECT_GT(components.size(), 80u);  // the five tables' headers and rows
+  EXPECT_EQ(components.size(), 79u);  // five headers, 13 + 11 + 11 + 14 + 25 rows
   EXPECT_EQ(components, component_lines(slurp(sample("errors/lei-hsu-xyzac.csv"))));
 
   const auto b =
       run_volmap("convert --machine " + m + " --errors " + link + " --to iso230-1 -o " + back);
   ASSERT_EQ(b.status, 0) << b.err;
-  EXPECT_NE(b.out.find("workpiece: shift (28.001, -39.998, -22.002) µm"), std::string::npos)
+  EXPECT_NE(b.out.find("Location errors converted from link to iso230-1."), std::string::npos)
       << b.out;
   const volmap::ErrorSet original = volmap::load_errors_csv(sample("errors/lei-hsu-xyzac.csv"));
   const volmap::ErrorSet round = volmap::load_errors_csv(back);
@@ -117,6 +122,31 @@ TEST(ConvertCli, ExportsRefuseLinkErrors) {
     EXPECT_NE(r.err.find("volmap convert"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(out)) << format;
   }
+}
+
+// A map's uncertainty from an identify report in the other meaning than the
+// errors file is refused: its standard errors belong to other parameters.
+TEST(ConvertCli, CovarianceOfTheOtherConventionIsRefused) {
+  const std::string dir = ::testing::TempDir();
+  const std::string m = sample("machines/lei-hsu-xyzac.json"), rec = dir + "cov_rec.csv",
+                    ident = dir + "cov_link.csv", report = dir + "cov_link.json",
+                    table = dir + "cov.vmt";
+  std::filesystem::remove(table);
+  ASSERT_EQ(
+      run_volmap("simulate --machine " + m + " --errors " + sample("errors/lei-hsu-xyzac.csv") +
+                 " --plan " + sample("plans/probe-ball.json") + " -o " + rec)
+          .status,
+      0);
+  const auto id = run_volmap("identify --machine " + m + " --recordings " + rec +
+                             " --convention link --setup-offsets -o " + ident + " --json");
+  ASSERT_EQ(id.status, 0) << id.err;
+  std::ofstream(report) << id.out;
+  const auto r =
+      run_volmap("map --machine " + m + " --errors " + sample("errors/lei-hsu-xyzac.csv") +
+                 " --spacing 300,250,250,65,90 --covariance " + report + " -o " + table);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("identified in the link convention"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(table));
 }
 
 }  // namespace

@@ -62,6 +62,27 @@ TEST(MapFactorized, ReproducesTheDirectModelAtArbitraryPointsThreeAxisBidirectio
   expect_reproduces("samples/machines/hsu-3axis.json", "samples/errors/hsu-3axis.csv");
 }
 
+// The location errors' meaning travels with them; a document without it was
+// written when they meant link errors.
+TEST(MapFactorized, KeepsTheLocationErrorsMeaning) {
+  const std::string machine = "samples/machines/lei-hsu-xyzac.json";
+  ErrorSet link = load_errors_csv(test::source_path("samples/errors/lei-hsu-xyzac.csv"));
+  link.convention = LocationConvention::kLink;
+  const ErrorModel direct(load_machine_json(test::source_path(machine)), link);
+  nlohmann::ordered_json doc =
+      nlohmann::ordered_json::parse(factorized_json(make_factorized(definition(machine), direct)));
+  EXPECT_EQ(doc["location_convention"], "link");
+  for (const char* meaning : {"iso230-1", ""}) {
+    if (*meaning)
+      doc["location_convention"] = meaning;
+    else
+      doc.erase("location_convention");
+    std::istringstream in(doc.dump());
+    EXPECT_EQ(read_factorized(in, "f.json").errors.convention,
+              *meaning ? LocationConvention::kIso230 : LocationConvention::kLink);
+  }
+}
+
 TEST(MapFactorized, DamagedDocumentIsRefusedWithItsPath) {
   const ErrorModel direct(load_machine_json(test::source_path("samples/machines/hsu-3axis.json")),
                           load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv")));

@@ -255,6 +255,27 @@ TEST(Identify, SingleBallOnlyCRotationFlagsTheACombination) {
   EXPECT_TRUE(in_json);
 }
 
+// --known with component errors only (a laser file, no convention line)
+// serves a fit in either meaning; with location errors it must be in the
+// fit's meaning.
+TEST(Identify, KnownErrorsAndTheFitsMeaning) {
+  const Machine m = machine("lei-hsu-xyzac");
+  ErrorSet truth = errors_from(blocks_of_sample(true));
+  truth.convention = LocationConvention::kLink;
+  const Recordings rec = simulate(ErrorModel(m, truth), plan_from(two_balls(1, 0.0), m), nullptr);
+  ErrorSet laser = errors_from(blocks_of_sample(false));
+  ASSERT_TRUE(laser.location.empty());
+  IdentifyOptions opt;
+  opt.convention = LocationConvention::kLink;
+  opt.known = &laser;
+  opt.parameters = truth_names();
+  EXPECT_NO_THROW(identify(m, rec, opt));
+  ErrorSet iso_location = errors_from("EC0X\n10\n");
+  opt.known = &iso_location;
+  opt.parameters = {"EX0C"};
+  EXPECT_THROW(identify(m, rec, opt), std::invalid_argument);
+}
+
 TEST(Identify, EveryIsoLocationErrorIsIdentifiable) {
   const Machine m = machine("lei-hsu-xyzac");
   const ErrorModel truth(m, errors_from(blocks_of_sample(true)));

@@ -95,6 +95,21 @@ TEST(LocationConvention, SquarenessOfATableCarryingAxis) {
   EXPECT_LT(r.check_tip_mm, 1e-12);
 }
 
+// A linear axis that moves against its letter's direction (X along -x):
+// its own turn still goes to the set-up, the round trip still holds.
+TEST(LocationConvention, LinearAxisAgainstItsLetter) {
+  Machine m = sample_machine("lei-hsu-xyzac");
+  for (Joint& j : m.workpiece_chain)
+    if (j.axis == AxisName::X) j.direction_parent = -Eigen::Vector3d::UnitX();
+  ErrorSet iso = sample_errors("lei-hsu-xyzac");
+  iso.location["EA0Y"] = 15e-6;
+  const ConventionConversion link =
+      convert_location_convention(m, iso, LocationConvention::kLink, Formulation::kIndependent);
+  EXPECT_LT(link.check_tip_mm, 2e-6);
+  const ConventionConversion back = to_iso(m, link.errors);
+  for (const auto& [n, v] : iso.location) EXPECT_NEAR(back.errors.location_error(n), v, 1e-12) << n;
+}
+
 // Errors that are no small errors (a unit mistake) are refused, not
 // decomposed into garbage.
 TEST(LocationConvention, LargeErrorsAreRefused) {

@@ -57,10 +57,13 @@ TEST(ErrorModel, TipErrorLinearIsExactToTheBit) {
     Machine machine;
     ErrorSet errors;
   };
+  ErrorSet bed_link = bed_errors;  // the link meaning's path: no P, L moves what X carries
+  bed_link.convention = LocationConvention::kLink;
   const Case cases[] = {
       {hsu3(),
        load_errors_csv(test::source_path("samples/errors/hsu-3axis.csv"))},  // bidirectional
-      {bed_machine, bed_errors}};
+      {bed_machine, bed_errors},
+      {bed_machine, bed_link}};
   for (const Case& k : cases) {
     SCOPED_TRACE(k.machine.name);
     const ErrorModel model(k.machine, k.errors);
