@@ -227,7 +227,12 @@ std::vector<ExportFile> heidenhain(const VolumetricTable& t, const ExportOptions
       files.push_back(kinematics_comp_file(g, errors.errors_of(g.axis)));
     }
     if (!errors.location.empty()) {
-      notes += "\nLocation errors (constants; kinematics description, Trans entries):\n";
+      notes +=
+          "\nLocation errors (constants, ISO 230-1 meaning: an axis line's position and\n"
+          "orientation; the axis turns about that line). A Trans entry before the axis alone\n"
+          "also moves what the axis carries (Lei & Hsu's link meaning): enter an offset of a\n"
+          "rotary axis's line before the axis and its inverse after it. Not confirmed against\n"
+          "the kinematics description's documentation: check on the control.\n";
       for (const auto& [name, value] : errors.location) notes += location_line(name, value);
     }
   }
