@@ -449,6 +449,22 @@ void ErrorModel::JointLever::location_gain(int c, Eigen::Vector3d& dP, Eigen::Ve
   dQ = sign * (R_w_L * a);
 }
 
+void ErrorModel::JointLever::gain(int c, bool location, Eigen::Vector3d& dP,
+                                  Eigen::Vector3d& dQ) const {
+  if (location) {
+    location_gain(c, dP, dQ);
+    return;
+  }
+  if (c < 3) {
+    dP = sign * R_w_L.col(c);
+    dQ.setZero();
+    return;
+  }
+  const Eigen::Vector3d e = Eigen::Vector3d::Unit(c - 3);
+  dP = sign * (R_w_L * e.cross(lever_component_mm));
+  dQ = sign * (R_w_L * e.cross(axis_L));
+}
+
 PoseError ErrorModel::first_order(const AxisVector& u, const ApproachDirections& dir) const {
   std::vector<JointLever> lv;
   levers(u, lv);

@@ -121,6 +121,10 @@ class ErrorModel {
     /// (e: translational unit, e': angular unit, r = lever_location_mm,
     /// a = axis_L); the zero error keeps the link form.
     void location_gain(int c, Eigen::Vector3d& dP, Eigen::Vector3d& dQ) const;
+    /// First-order gain of component c of this joint's location errors
+    /// (location_gain) or component errors: dP = sign R_w_L e (c < 3), or
+    /// dP = sign R_w_L (e' x lever_component), dQ = sign R_w_L (e' x a).
+    void gain(int c, bool location, Eigen::Vector3d& dP, Eigen::Vector3d& dQ) const;
   };
   /// Levers of every joint, workpiece chain then tool chain (base first).
   void levers(const AxisVector& u, std::vector<JointLever>& out) const;

@@ -38,34 +38,19 @@ int GainEvaluator::index_of(const std::string& name) const {
 
 void GainEvaluator::at(const AxisVector& u) { model_.levers(u, levers_); }
 
-// Same algebra as error_gains (core/sensitivity.cc), component errors:
-//   translational c:  dP = sign R_w_L e_c
-//   angular c:        dP = sign R_w_L (e_c x lever),  dQ = sign R_w_L (e_c x axis_L)
-// Location errors: JointLever::location_gain.
+// The algebra of error_gains (core/sensitivity.cc): JointLever::gain.
 Eigen::Vector3d GainEvaluator::dP(int k) const {
   const Entry& e = entries_[static_cast<std::size_t>(k)];
-  const ErrorModel::JointLever& L = levers_[static_cast<std::size_t>(e.lever)];
-  if (e.location) {
-    Eigen::Vector3d gP, gQ;
-    L.location_gain(e.component, gP, gQ);
-    return gP;
-  }
-  if (e.component < 3) return L.sign * L.R_w_L.col(e.component);
-  const Eigen::Vector3d unit = Eigen::Vector3d::Unit(e.component - 3);
-  return L.sign * (L.R_w_L * unit.cross(L.lever_component_mm));
+  Eigen::Vector3d gP, gQ;
+  levers_[static_cast<std::size_t>(e.lever)].gain(e.component, e.location, gP, gQ);
+  return gP;
 }
 
 Eigen::Vector3d GainEvaluator::dQ(int k) const {
   const Entry& e = entries_[static_cast<std::size_t>(k)];
-  const ErrorModel::JointLever& L = levers_[static_cast<std::size_t>(e.lever)];
-  if (e.location) {
-    Eigen::Vector3d gP, gQ;
-    L.location_gain(e.component, gP, gQ);
-    return gQ;
-  }
-  if (e.component < 3) return Eigen::Vector3d::Zero();
-  const Eigen::Vector3d unit = Eigen::Vector3d::Unit(e.component - 3);
-  return L.sign * (L.R_w_L * unit.cross(L.axis_L));
+  Eigen::Vector3d gP, gQ;
+  levers_[static_cast<std::size_t>(e.lever)].gain(e.component, e.location, gP, gQ);
+  return gQ;
 }
 
 }  // namespace volmap

@@ -45,16 +45,7 @@ std::vector<ErrorGain> error_gains(const Machine& m, Formulation f, const AxisVe
     if (!L) throw std::logic_error("no joint for " + name);
     const int c = static_cast<int>(n.component);
     ErrorGain g{name, c >= 3, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
-    const Eigen::Vector3d& lever = L->lever_component_mm;
-    if (n.location) {
-      L->location_gain(c, g.dP, g.dQ);
-    } else if (c < 3) {
-      g.dP = L->sign * L->R_w_L.col(c);
-    } else {
-      const Eigen::Vector3d e = Eigen::Vector3d::Unit(c - 3);
-      g.dP = L->sign * L->R_w_L * e.cross(lever);
-      g.dQ = L->sign * L->R_w_L * e.cross(L->axis_L);
-    }
+    L->gain(c, n.location, g.dP, g.dQ);
     gains.push_back(g);
   }
   return gains;
