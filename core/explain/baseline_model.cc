@@ -6,25 +6,39 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
 #include "core/explain/axis_labels.h"
+#include "core/explain/detection.h"
 #include "core/explain/distinct_values.h"
 
 namespace volmap::explanation {
 namespace {
 
-constexpr int kSparseTargets = 12;  ///< up to this many targets: a value per target
+constexpr int kSparseTargets = 12;     ///< up to this many targets: a value per target
+constexpr int kMaxAdaptiveDegree = 8;  ///< the automatic degree of a densely sampled axis
 
-/// Polynomial degree of the component errors of each linear axis, and the
-/// degrees as the description lists them ("X 3, Y 1").
+/// Polynomial degree of the component errors of each linear axis; adaptive:
+/// automatic and densely sampled (the degree is raised while the data
+/// demands it).
 struct PolynomialDegrees {
   std::array<int, kAxisNameCount> of_axis{};
-  std::string text;
+  std::array<bool, kAxisNameCount> adaptive{};
+  /// The degrees as the description lists them ("X 3, Y 1").
+  std::string text(const Machine& m) const {
+    std::string t;
+    for (AxisName a : m.axis_order)
+      if (!is_rotary(a))
+        t += fmt::format("{}{} {}", t.empty() ? "" : ", ", axis_letter(a),
+                         of_axis[static_cast<std::size_t>(a)]);
+    return t;
+  }
 };
 
 // Degree per linear axis: opt.degree, or (0, automatic) a value per target
 // for an axis run through at most kSparseTargets targets (as ISO 230-2
-// evaluates a positioning test: the mean deviation of each target), else cubic.
+// evaluates a positioning test: the mean deviation of each target), else
+// cubic to start with (raise_degrees).
 PolynomialDegrees polynomial_degrees(const Observations& obs, const ExplainOptions& opt) {
   PolynomialDegrees degrees;
   for (AxisName a : obs.machine.axis_order) {
@@ -34,9 +48,12 @@ PolynomialDegrees polynomial_degrees(const Observations& obs, const ExplainOptio
       positions.push_back(obs.position(a, obs.recording_row[e]));
     const int targets = static_cast<int>(unique_sorted(positions).size());
     int deg = opt.degree;
-    if (deg == 0) deg = targets <= kSparseTargets ? std::max(1, targets - 1) : 3;
-    degrees.of_axis[static_cast<std::size_t>(a)] = deg;
-    degrees.text += fmt::format("{}{} {}", degrees.text.empty() ? "" : ", ", axis_letter(a), deg);
+    const std::size_t ai = static_cast<std::size_t>(a);
+    if (deg == 0) {
+      deg = targets <= kSparseTargets ? std::max(1, targets - 1) : 3;
+      degrees.adaptive[ai] = targets > kSparseTargets;
+    }
+    degrees.of_axis[ai] = deg;
   }
   return degrees;
 }
@@ -102,16 +119,72 @@ LinearModel independent_model(const Observations& obs, const std::vector<Eigen::
   return model;
 }
 
+/// The baseline's model at given degrees, fitted, and what it holds.
+struct BaselineBuild {
+  LinearModel model;
+  std::size_t columns = 0;  ///< before the rank test
+  int location = 0, components = 0;
+};
+
+BaselineBuild build_baseline(const Observations& obs, const ExplainOptions& opt,
+                             const PolynomialDegrees& degrees) {
+  std::vector<Eigen::VectorXd> cols;
+  add_component_constants(obs, cols);
+  BaselineBuild b;
+  if (!opt.baseline) add_rigid_body_errors(obs, degrees, cols, b.location, b.components);
+  b.columns = cols.size();
+  b.model = independent_model(obs, cols);
+  fit(obs, b.model);
+  return b;
+}
+
+// A densely sampled axis's component errors need not be cubic (a laser
+// table interpolated linearly has kinks): its degree is raised, one axis at
+// a time, the most significant first, while the added powers pass the
+// detection test (detection.h, at the same family-wise level as a finding,
+// the adaptive axes being the family), up to kMaxAdaptiveDegree. Without
+// this, a smooth error the cubic misses would be named as a scanned effect.
+void raise_degrees(const Observations& obs, const ExplainOptions& opt, PolynomialDegrees& degrees,
+                   BaselineBuild& b) {
+  const double family =
+      static_cast<double>(std::count(degrees.adaptive.begin(), degrees.adaptive.end(), true));
+  while (true) {
+    std::optional<std::pair<double, AxisName>> best;
+    BaselineBuild best_build;
+    for (AxisName a : obs.machine.axis_order) {
+      const std::size_t ai = static_cast<std::size_t>(a);
+      if (!degrees.adaptive[ai] || degrees.of_axis[ai] >= kMaxAdaptiveDegree) continue;
+      PolynomialDegrees raised = degrees;
+      ++raised.of_axis[ai];
+      BaselineBuild t = build_baseline(obs, opt, raised);
+      const Eigen::Index added = t.model.k() - b.model.k();
+      if (added <= 0) continue;
+      TestDesign d;
+      d.columns = static_cast<double>(added);
+      d.residual_dof = std::max(1.0, static_cast<double>(obs.count - t.model.k()));
+      d.family = family;
+      const double sigma2 = std::max(t.model.rss, 1e-300) / d.residual_dof;
+      const double p = corrected_p_value(std::max(0.0, b.model.rss - t.model.rss) / sigma2, d);
+      if (p < kFamilyAlpha && (!best || p < best->first)) {
+        best = {p, a};
+        best_build = std::move(t);
+      }
+    }
+    if (!best) return;
+    ++degrees.of_axis[static_cast<std::size_t>(best->second)];
+    b = std::move(best_build);
+  }
+}
+
 }  // namespace
 
 LinearModel baseline_model(const Observations& obs, const ExplainOptions& opt,
                            std::string& description) {
-  std::vector<Eigen::VectorXd> cols;
-  add_component_constants(obs, cols);
-  int location = 0, components = 0;
-  const PolynomialDegrees degrees = polynomial_degrees(obs, opt);
-  if (!opt.baseline) add_rigid_body_errors(obs, degrees, cols, location, components);
-  LinearModel model = independent_model(obs, cols);
+  PolynomialDegrees degrees = polynomial_degrees(obs, opt);
+  BaselineBuild b = build_baseline(obs, opt, degrees);
+  if (!opt.baseline) raise_degrees(obs, opt, degrees, b);
+  LinearModel& model = b.model;
+  const int location = b.location, components = b.components;
   const int linear_axes =
       static_cast<int>(std::count_if(obs.machine.axis_order.begin(), obs.machine.axis_order.end(),
                                      [](AxisName a) { return !is_rotary(a); }));
@@ -125,9 +198,9 @@ LinearModel baseline_model(const Observations& obs, const ExplainOptions& opt,
         "{} location "
         "errors, a constant per recorded component; {} of {} parameters identifiable on this "
         "recording",
-        components, linear_axes, degrees.text, location, model.k(), cols.size());
+        components, linear_axes, degrees.text(obs.machine), location, model.k(), b.columns);
   }
-  return model;
+  return std::move(model);
 }
 
 }  // namespace volmap::explanation

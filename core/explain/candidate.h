@@ -38,6 +38,15 @@ struct Candidate {  // an aggregate: build one with designated initializers
   std::function<double(int row)> plot_x{};  ///< the regressor that gives it away
   std::string plot_label{};
   std::function<int(int row)> plot_group{};
+  // detection (detection.h): which coefficients make the amplitude the
+  // detectable size is quoted for, and its unit (JSON key detectable_<unit>)
+  enum class Amplitude {
+    kFirst,      ///< coefficient 0 (the others at zero)
+    kPair,       ///< hypot of coefficients 0 and 1 at the least visible phase
+    kEachColumn  ///< any one coefficient alone (one run shifted), the least visible
+  };
+  Amplitude amplitude = Amplitude::kFirst;
+  std::string amplitude_unit = "um";
   std::string key() const {
     return effect + "/" + (axis ? axis_letter(*axis) : "-") + "/" + variant;
   }

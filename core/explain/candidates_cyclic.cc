@@ -31,6 +31,7 @@ void add_cyclic_candidate(const CandidateContext& c, AxisName k, const Eigen::Ve
   const double p_min = std::max(2.2 * gap, 1e-3), p_max = span / 3.0;
   if (!(p_max > 1.5 * p_min)) return;  // too few positions per period to scan a period at all
   Candidate cand{.effect = "cyclic", .axis = k, .variant = "", .refine = true, .nonlinear = 1};
+  cand.amplitude = Candidate::Amplitude::kPair;
   const double f_lo = 1.0 / p_max, f_hi = 1.0 / p_min;
   const double df = std::max(1.0 / (4.0 * span), (f_hi - f_lo) / 600.0);
   for (double f = f_lo; f <= f_hi; f += df) cand.grid.push_back(1.0 / f);

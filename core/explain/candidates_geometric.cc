@@ -23,6 +23,7 @@ Candidate linear_error_candidate(const Observations& obs, AxisName k, int comp,
   const std::string effect =
       angular ? "angular" : (comp == static_cast<int>(k) ? "scale" : "squareness");
   Candidate lin{.effect = effect, .axis = k, .variant = name};
+  lin.amplitude_unit = angular ? "urad_per_m" : "um_per_m";
   // The positioning error of K (EKK): scale (linear) and its curvature
   // (s^2, s^3 at the ends of the travel), as a laser calibration gives it.
   const bool positioning = !angular && comp == static_cast<int>(k);
@@ -101,6 +102,7 @@ Candidate straightness_candidate(const Observations& obs, AxisName k, const std:
 Candidate location_squareness_candidate(const Observations& obs, AxisName k,
                                         const std::string& name, Eigen::Index col) {
   Candidate sq{.effect = "squareness", .axis = k, .variant = name};
+  sq.amplitude_unit = "urad";
   sq.build = [&obs, col](double) {
     return one_column(obs,
                       [&](Eigen::Index e) { return obs.error_gain(e, col) * 1e-3; });  // urad -> um

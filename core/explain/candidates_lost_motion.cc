@@ -44,6 +44,7 @@ Candidate reversal_candidate(const Observations& obs, AxisName k, const Eigen::V
 
 Candidate servo_lag_candidate(const Observations& obs, AxisName k, const Eigen::VectorXd& along_k) {
   Candidate sl{.effect = "servo_lag", .axis = k};
+  sl.amplitude_unit = "um_per_m_min";
   sl.build = [&obs, k, along_k](double) {
     return one_column(obs, [&](Eigen::Index e) {
       const int i = obs.recording_row[static_cast<std::size_t>(e)];

@@ -43,6 +43,8 @@ Eigen::MatrixXd harmonic_columns(const Observations& obs, AxisName rax, double o
 Candidate rotary_candidate(const Observations& obs, const std::string& effect, AxisName rax,
                            const char* explanation_format) {
   Candidate cand{.effect = effect, .axis = rax, .grid = {1, 2, 3, 4}, .nonlinear = 1};
+  cand.amplitude = Candidate::Amplitude::kPair;
+  cand.amplitude_unit = "urad";
   cand.report = [rax, explanation_format](const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov,
                                           double order, double, Finding& f) {
     const double amp = report_order_amplitude(beta, cov, order, f);

@@ -15,6 +15,7 @@ Candidate sag_candidate(const Observations& obs, AxisName k, AxisName j, double 
                         const Eigen::VectorXd& along_k) {
   const Eigen::Index n = static_cast<Eigen::Index>(obs.count);
   Candidate sag{.effect = "sag", .axis = k, .variant = axis_letter(j)};
+  sag.amplitude_unit = is_rotary(j) ? "um_per_deg2" : "um_per_mm2";  // the coefficient
   sag.build = [&obs, along_k, n, j, centre](double) {
     Eigen::MatrixXd C(n, 2);
     for (Eigen::Index e = 0; e < n; ++e) {

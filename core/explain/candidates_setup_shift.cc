@@ -16,6 +16,7 @@ void add_setup_shift_candidate(const CandidateContext& c, AxisName k,
   if (obs.run_count < 2) return;
   const Eigen::Index n = static_cast<Eigen::Index>(obs.count);
   Candidate ss{.effect = "setup_shift", .axis = k, .per_run = true};
+  ss.amplitude = Candidate::Amplitude::kEachColumn;
   const int runs = obs.run_count;
   ss.build = [&obs, along_k, n, runs](double) {
     Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, runs);

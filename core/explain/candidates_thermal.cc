@@ -73,6 +73,7 @@ Candidate rate_candidate(const Candidate& settle, const DriftForm& form,
   const Observations& obs = *form.obs;
   Candidate rate = settle;
   rate.variant = form.kind() + "/rate";
+  rate.amplitude_unit = "um_per_h";
   rate.grid.clear();
   rate.nonlinear = 0;
   rate.refine = false;
@@ -102,6 +103,7 @@ Candidate temperature_candidate(const NamedColumn& tc, const DriftForm& form,
   const AxisName k = form.k;
   const std::string kind = form.kind();
   Candidate temp{.effect = "thermal_drift", .axis = k, .variant = kind + "/" + tc.name};
+  temp.amplitude_unit = "um_per_k";
   const std::vector<double>* temperature_c = &tc.values;
   temp.build = [&obs, along_k, form, temperature_c](double) {
     // ISO 1 reference temperature: 20 degC (matters for kind scale).

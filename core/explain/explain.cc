@@ -3,6 +3,8 @@
 // docs/explain.md describes the method; each step has its own file.
 #include "core/explain/explain.h"
 
+#include <fmt/format.h>
+
 #include <stdexcept>
 
 #include "core/explain/baseline_model.h"
@@ -43,16 +45,55 @@ std::string rotary_lines_missing_from_baseline(const Observations& obs, const Er
   return missing;
 }
 
-void add_notes(const CandidateContext& ctx, const Selection& sel, ExplainResult& res) {
+/// The test that would reveal an effect this recording's design cannot.
+std::string revealing_test(const std::string& effect) {
+  if (effect == "reversal")
+    return "approach every target from both sides (ISO 230-2 bidirectional run)";
+  if (effect == "servo_lag") return "run the test at two feeds or more, in both directions";
+  if (effect == "thermal_drift")
+    return "return to the same targets over time (a return sweep, repeated runs) or record a "
+           "temperature";
+  if (effect == "cyclic")
+    return "sample the axis at least 2.2 points per period over three periods";
+  if (effect == "sag")
+    return "record the deflecting axis at several positions of the input axis, against a fixed "
+           "baseline (`--baseline`): a fitted baseline's straightness takes up any deflection "
+           "that depends on one axis";
+  if (effect == "setup_shift") return "repeat the run, keeping the set-up between runs";
+  if (effect == "rotary_wobble" || effect == "rotary_positioning")
+    return "turn the axis through a full revolution at 8 angles or more";
+  return "move the axis over its travel and record the direction the error deflects";
+}
+
+/// Candidates tested whose amplitude no design direction can show
+/// (||P_perp g|| ~ 0 for the least visible amplitude): said, with the test
+/// that would.
+void design_blind_notes(ExplainResult& res) {
+  for (const CandidateResult& c : res.candidates) {
+    if (c.status == "not estimable" || c.detectable) continue;
+    res.notes.push_back(fmt::format(
+        "{}{}{}: this recording's design cannot reveal it (its amplitude leaves no trace "
+        "beyond the model); to test it, {}",
+        c.effect, c.axis ? " " + axis_letter(*c.axis) : "",
+        c.variant.empty() ? "" : " (" + c.variant + ")", revealing_test(c.effect)));
+  }
+}
+
+void add_notes(const CandidateContext& ctx, ExplainResult& res) {
   const ExplainOptions& opt = ctx.options;
   if (opt.machine_assumed && !ctx.rotary_axes.empty())
     res.notes.push_back(
         "no `machine`: the rotary axes were taken to turn the workpiece about lines through the "
         "origin along X, Y or Z, so effects of the rotary axes (wobble, positioning, a sag driven "
         "by a rotary angle) were not tried; give the machine that made the recording for them");
-  for (const std::string& s : sel.not_estimable)
-    res.notes.push_back(
-        s + ": not estimable on this recording (the baseline already spans its columns)");
+  for (const CandidateResult& c : res.candidates)
+    if (c.status == "not estimable")
+      res.notes.push_back(fmt::format(
+          "{}{}{}: not estimable on this recording (the baseline already spans its columns); to "
+          "test it, {}",
+          c.effect, c.axis ? " " + axis_letter(*c.axis) : "",
+          c.variant.empty() ? "" : " (" + c.variant + ")", revealing_test(c.effect)));
+  design_blind_notes(res);
   if (opt.baseline) {
     const std::string missing = rotary_lines_missing_from_baseline(ctx.obs, *opt.baseline);
     if (!missing.empty())
@@ -95,7 +136,8 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
   res.final_rms_um = rms_of(obs, sel.model.rss);
   res.final_heldout_rms_um = sel.heldout_rms_um;
   report_findings(ctx, sel, res);
-  add_notes(ctx, sel, res);
+  res.candidates = candidate_results(ctx, sel);
+  add_notes(ctx, res);
   return res;
 }
 

@@ -105,6 +105,21 @@ struct Confounded {
   std::string explanation, remedy;
 };
 
+/// How one candidate was tested (docs/explain.md, "Detection"): its
+/// statistic, its p-value corrected for the scan and the family, and the
+/// smallest amplitude the recording's design lets the test see with 95 %
+/// power (none when the design cannot reveal it at all).
+struct CandidateResult {
+  std::string effect;
+  std::optional<AxisName> axis;
+  std::string variant;
+  std::string status;  ///< "finding", "confounded", "not significant", "did not hold up"
+  double chi2 = 0, critical_chi2 = 0, p_value = 1;
+  std::string detectable_unit;                       ///< the key is detectable_<unit>
+  std::optional<double> detectable;                  ///< in that unit
+  std::optional<std::pair<std::string, double>> at;  ///< the nonlinear parameter it was quoted at
+};
+
 struct ExplainResult {
   std::string recordings_file;
   std::size_t observations = 0;  ///< scalar equations
@@ -115,6 +130,7 @@ struct ExplainResult {
   std::vector<Mismatch> mismatch;
   std::vector<Finding> findings;
   std::vector<Confounded> confounded;
+  std::vector<CandidateResult> candidates;  ///< every candidate tested, in a fixed order
   double final_rms_um = 0.0;
   std::optional<double> final_heldout_rms_um;
   std::vector<std::string> notes;  ///< candidates not estimable on this recording, etc.

@@ -88,6 +88,51 @@ std::string svg_panel(const std::string& title, const std::string& x_label,
 
 }  // namespace
 
+/// Every candidate tested: status, statistic, detectable amplitude.
+nlohmann::ordered_json candidates_json(const std::vector<CandidateResult>& candidates) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const CandidateResult& c : candidates) {
+    nlohmann::ordered_json o;
+    o["effect"] = c.effect;
+    o["axis"] = axis_json(c.axis);
+    o["variant"] = c.variant;
+    o["status"] = c.status;
+    o["detectable_" + c.detectable_unit] = json_number(c.detectable);
+    if (c.at) o["at"] = {{c.at->first, json_number(c.at->second)}};
+    o["chi2"] = json_number(round_significant(c.chi2, 5));
+    o["critical_chi2"] = json_number(round_significant(c.critical_chi2, 5));
+    o["p_value"] = json_number(round_significant(c.p_value, 3));
+    out.push_back(o);
+  }
+  return out;
+}
+
+/// The candidates' table of the report.
+std::string candidates_html(const std::vector<CandidateResult>& candidates) {
+  std::ostringstream s;
+  s << "<h2>Detection limits</h2>\n<p class=\"note\">Every candidate tested: its likelihood-ratio "
+       "statistic &chi;&sup2; against the critical value (family-wise 0.1 % false findings, "
+       "the scan of its period, time constant or order and the number of candidates allowed "
+       "for), and the smallest amplitude this recording would reveal with 95 % power "
+       "(docs/explain.md, Detection).</p>\n<table id=\"candidates\">\n<tr><th>effect</th>"
+       "<th>axis</th><th>variant</th><th>status</th><th>detectable</th><th>at</th>"
+       "<th>&chi;&sup2;</th><th>critical</th><th>p</th></tr>\n";
+  for (const CandidateResult& c : candidates) {
+    const std::string detectable =
+        c.detectable
+            ? fmt::format("{:.3g} {}", *c.detectable, explanation::unit_text(c.detectable_unit))
+            : std::string("not revealed by this design");
+    const std::string at = c.at ? fmt::format("{} {:.4g}", c.at->first, c.at->second) : "";
+    s << fmt::format(
+        "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.1f}</td>"
+        "<td>{:.1f}</td><td>{:.2g}</td></tr>\n",
+        c.effect, c.axis ? std::string(1, axis_char(*c.axis)) : "-", html_escape(c.variant),
+        c.status, html_escape(detectable), html_escape(at), c.chi2, c.critical_chi2, c.p_value);
+  }
+  s << "</table>\n";
+  return s.str();
+}
+
 nlohmann::ordered_json explain_json(const ExplainResult& r) {
   nlohmann::ordered_json j;
   j["format"] = "volmap-explain/1";
@@ -145,6 +190,7 @@ nlohmann::ordered_json explain_json(const ExplainResult& r) {
   j["confounded"] = cs;
   j["final"] = {{"rms_um", json_number(r.final_rms_um)},
                 {"heldout_rms_um", json_number(r.final_heldout_rms_um)}};
+  j["candidates"] = candidates_json(r.candidates);
   j["notes"] = r.notes;
   return j;
 }
@@ -276,6 +322,7 @@ std::string explain_html(const ExplainResult& r) {
       << (f.plot.group.empty() ? "" : "Red: approached from +, blue: approached from &minus;. ")
       << "Black dashes: the finding's fitted term at each point.</p>\n";
   }
+  if (!r.candidates.empty()) s << candidates_html(r.candidates);
   if (!r.notes.empty()) {
     s << "<h2>Notes</h2>\n<ul>\n";
     for (const std::string& n : r.notes) s << "<li>" << html_escape(n) << "</li>\n";

@@ -14,4 +14,9 @@ namespace volmap::explanation {
 /// res.notes instead.
 void report_findings(const CandidateContext& ctx, const Selection& sel, ExplainResult& res);
 
+/// Every candidate tested (detectability.cc): status, statistic and the
+/// smallest amplitude the design can reveal (detection.h), against the final
+/// model (without the candidate itself when it is in it) and its sigma.
+std::vector<CandidateResult> candidate_results(const CandidateContext& ctx, const Selection& sel);
+
 }  // namespace volmap::explanation

@@ -102,6 +102,11 @@ ProfileGain profile(const Observations& obs, const LinearModel& model, const Col
   return g;
 }
 
+Eigen::MatrixXd projected_out(const LinearModel& model, const Eigen::MatrixXd& C) {
+  if (model.k() == 0) return C;
+  return C - model.X * model.G_ldlt.solve(model.X.transpose() * C);
+}
+
 LinearModel with_block(const LinearModel& model, const ColumnBlock& b, int nonlinear) {
   LinearModel out;
   out.X.resize(model.X.rows(), model.k() + b.cols.cols());

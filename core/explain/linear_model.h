@@ -61,6 +61,10 @@ struct ProfileGain {
 ProfileGain profile(const Observations& obs, const LinearModel& model, const ColumnBlock& b,
                     bool want_fitted = false);
 
+/// The columns C (weighted, normalised like the model's) with the fitted
+/// model's columns projected out: C - X G^-1 X^T C.
+Eigen::MatrixXd projected_out(const LinearModel& model, const Eigen::MatrixXd& C);
+
 /// The model with block b appended (not fitted).
 LinearModel with_block(const LinearModel& model, const ColumnBlock& b, int nonlinear);
 /// The model without its columns first_col .. first_col + count - 1 and

@@ -101,6 +101,21 @@ std::string parameters_text(const std::vector<std::pair<std::string, nlohmann::j
   return s;
 }
 
+std::string unit_text(const std::string& unit) {
+  static const std::pair<const char*, const char*> kUnits[] = {{"um", "µm"},
+                                                               {"urad", "µrad"},
+                                                               {"um_per_h", "µm/h"},
+                                                               {"um_per_k", "µm/K"},
+                                                               {"um_per_m_min", "µm per m/min"},
+                                                               {"um_per_mm2", "µm/mm²"},
+                                                               {"um_per_deg2", "µm/deg²"},
+                                                               {"um_per_m", "µm/m"},
+                                                               {"urad_per_m", "µrad/m"}};
+  for (const auto& [key, text] : kUnits)
+    if (unit == key) return text;
+  return unit;
+}
+
 std::string regressor_label(const std::string& r) {
   auto upper = [](char c) {
     return static_cast<char>(std::toupper(static_cast<unsigned char>(c)));

@@ -33,6 +33,9 @@ void amplitude_phase(const Eigen::VectorXd& beta, const Eigen::MatrixXd& cov, in
 std::string parameters_text(const std::vector<std::pair<std::string, nlohmann::json>>& parameters,
                             const std::vector<std::pair<std::string, double>>& std_errors);
 
+/// A unit as a key writes it ("um_per_m_min") for a reader ("µm per m/min").
+std::string unit_text(const std::string& unit);
+
 /// A plot's regressor (a recordings column, "run", "feed_mm_min * dir_x")
 /// as an axis label: its meaning, a comma, its unit ("X position, mm",
 /// "time since start, s").

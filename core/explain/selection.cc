@@ -12,9 +12,8 @@
 namespace volmap::explanation {
 namespace {
 
-constexpr double kMinDeltaBic = -10.0;    ///< a step must lower BIC by more than 10
-constexpr double kMinHeldoutGain = 0.05;  ///< and the held-out RMS by more than 5 %
-constexpr double kAbsorbed = 1e-3;        ///< residual share of a column the model spans
+constexpr double kMinDeltaBic = -10.0;  ///< confounded: BIC within this margin of the best
+constexpr double kAbsorbed = 1e-3;      ///< residual share of a column the model spans
 constexpr double kConfoundCorrelation = 0.98;
 constexpr double kConfoundGainShare = 0.9;
 
@@ -26,15 +25,6 @@ std::string used_key(const Candidate& c) {
       (c.effect == "scale" && c.variant.size() > 2))
     k += "/" + c.variant;
   return k;
-}
-
-/// The candidate as the notes name it: "effect AXIS (variant)".
-std::string not_estimable_name(const Candidate& c) {
-  const std::string key = used_key(c);
-  return c.effect + (c.axis ? " " + axis_letter(*c.axis) : "") +
-         (key.size() > c.effect.size() + 2 + (c.axis ? axis_letter(*c.axis).size() : 1)
-              ? " (" + c.variant + ")"
-              : "");
 }
 
 /// Candidates not tried on this recording.
@@ -79,6 +69,10 @@ class Selector {
         break;
     }
     backward_check();
+    for (const Candidate& c : cands_) {
+      const auto t = tests_.find(&c);
+      if (t != tests_.end()) sel_.tests.push_back(t->second);
+    }
     return std::move(sel_);
   }
 
@@ -99,26 +93,85 @@ class Selector {
       if (f && c.refine) hints_[c.key()] = f->theta;
       if (!f) continue;
       if (f->gain.absorbed_share < kAbsorbed) {
-        sel_.not_estimable.insert(not_estimable_name(c));
+        CandidateTest& t = tests_[&c];
+        t.cand = &c;
+        t.estimable = false;
         continue;
       }
       fits.push_back(std::move(*f));
     }
+    const double family = static_cast<double>(std::max<std::size_t>(1, fits.size()));
+    if (sel_.chosen.empty()) sel_.first_family = family;
+    for (const FittedCandidate& f : fits) {
+      CandidateTest& t = tests_[f.cand];
+      t.cand = f.cand;
+      t.estimable = true;
+      t.theta = f.theta;
+      t.design = design_of(f);
+      t.design.family = family;
+      t.chi2 = statistic(sel_.model.rss, f.gain.rss, t.design);
+      t.p_value = corrected_p_value(t.chi2, t.design);
+    }
     return fits;
   }
 
-  /// Takes the best candidate (by BIC) that holds up on held-out runs;
-  /// false when none does.
+  /// How candidate f is tested: its projected rank and look-elsewhere
+  /// (cached from the first step it was tried, against that step's model),
+  /// the residual degrees of freedom of the model with it.
+  TestDesign design_of(const FittedCandidate& f) {
+    const Candidate& c = *f.cand;
+    auto it = designs_.find(&c);
+    if (it == designs_.end()) it = designs_.emplace(&c, scan_design(c, f.theta)).first;
+    TestDesign d = it->second;
+    d.residual_dof = std::max(
+        1.0, static_cast<double>(obs_.count) - static_cast<double>(sel_.model.k()) - d.columns);
+    return d;
+  }
+
+  TestDesign scan_design(const Candidate& c, double theta) const {
+    TestDesign d;
+    auto basis = [&](double th) {
+      const ColumnBlock b = make_column_block(obs_, c.build(th), c.per_run);
+      // unit-RMS columns: squared norm n; below 1e-6 of it a direction is spanned
+      return orthonormal_basis(projected_out(sel_.model, b.cols),
+                               1e-6 * static_cast<double>(obs_.count));
+    };
+    d.columns = static_cast<double>(std::max<Eigen::Index>(1, basis(theta).cols()));
+    if (c.grid.empty()) return d;
+    if (!c.refine) {
+      d.discrete = static_cast<double>(c.grid.size());
+      return d;
+    }
+    auto between = [&](std::size_t i, double frac) {
+      const double a = c.grid[i], b = c.grid[i + 1];
+      if (c.log_refine) return std::exp((1 - frac) * std::log(a) + frac * std::log(b));
+      if (c.effect == "cyclic") return 1.0 / ((1 - frac) / a + frac / b);  // even in frequency
+      return (1 - frac) * a + frac * b;
+    };
+    d.path_length = path_length(
+        static_cast<int>(c.grid.size()),
+        [&](int i) { return basis(c.grid[static_cast<std::size_t>(i)]); },
+        [&](int i, double frac) { return basis(between(static_cast<std::size_t>(i), frac)); });
+    return d;
+  }
+
+  /// chi2 = (RSS0 - RSS1) / sigma^2, sigma^2 from the model with the candidate.
+  static double statistic(double rss_without, double rss_with, const TestDesign& d) {
+    const double sigma2 = std::max(rss_with, 1e-300) / std::max(1.0, d.residual_dof);
+    return std::max(0.0, rss_without - rss_with) / sigma2;
+  }
+
+  /// Takes the best candidate (by BIC) that passes the detection test and
+  /// holds up on held-out runs; false when none does.
   bool take_best(std::vector<FittedCandidate>& fits) {
     const LinearModel& model = sel_.model;
     const double bic_now = bic(obs_, model.rss, static_cast<int>(model.k()) + model.nonlinear);
     for (FittedCandidate& f : fits) {
-      if (f.bic - bic_now > kMinDeltaBic) break;
+      if (!(tests_[f.cand].p_value < kFamilyAlpha)) continue;  // noise could do this
       LinearModel next = with_block(model, f.block, f.cand->nonlinear);
       fit(obs_, next);
       const std::optional<double> ho = heldout_rms(obs_, next);
-      if (ho && sel_.heldout_rms_um && !(*ho < *sel_.heldout_rms_um * (1.0 - kMinHeldoutGain)))
-        continue;  // does not hold up
+      if (ho && sel_.heldout_rms_um && !(*ho < *sel_.heldout_rms_um)) continue;  // does not hold up
       SelectedEffect s;
       s.delta_bic = f.bic - bic_now;
       s.rms_before_um = rms_of(obs_, model.rss);
@@ -128,6 +181,7 @@ class Selector {
       s.first_col = model.k();
       s.confounded = find_confounded(f, fits);
       used_.insert(used_key(*f.cand));
+      tests_[f.cand].taken = true;
       s.fitted = std::move(f);
       sel_.chosen.push_back(std::move(s));
       sel_.model = std::move(next);
@@ -164,7 +218,7 @@ class Selector {
   // ones explain its structure better (a sag that stood in for two
   // squareness errors not yet found). Each finding must still hold up in
   // the final model, by the same two tests as when it entered: removing it
-  // raises BIC by more than 10 and the held-out RMS by more than 5 %.
+  // fails the detection test's level, and raises the held-out RMS.
   void backward_check() {
     while (drop_one_that_does_not_hold_up()) {
     }
@@ -173,21 +227,22 @@ class Selector {
   bool drop_one_that_does_not_hold_up() {
     LinearModel& model = sel_.model;
     std::vector<SelectedEffect>& chosen = sel_.chosen;
-    const double bic_full = bic(obs_, model.rss, static_cast<int>(model.k()) + model.nonlinear);
     for (std::size_t i = 0; i < chosen.size(); ++i) {
       SelectedEffect& s = chosen[i];
       if (s.confounded) continue;
       const Eigen::Index kc = s.fitted.block.cols.cols();
       LinearModel reduced = without_block(model, s.first_col, kc, s.fitted.cand->nonlinear);
       fit(obs_, reduced);
-      const double bic_reduced =
-          bic(obs_, reduced.rss, static_cast<int>(reduced.k()) + reduced.nonlinear);
-      bool holds = bic_full - bic_reduced <= kMinDeltaBic;
+      TestDesign d = tests_[s.fitted.cand].design;
+      d.residual_dof =
+          std::max(1.0, static_cast<double>(obs_.count) - static_cast<double>(model.k()));
+      bool holds = corrected_p_value(statistic(reduced.rss, model.rss, d), d) < kFamilyAlpha;
       if (holds && sel_.heldout_rms_um) {
         const std::optional<double> ho_reduced = heldout_rms(obs_, reduced);
-        holds = !ho_reduced || *sel_.heldout_rms_um < *ho_reduced * (1.0 - kMinHeldoutGain);
+        holds = !ho_reduced || *sel_.heldout_rms_um < *ho_reduced;
       }
       if (holds) continue;
+      tests_[s.fitted.cand].taken = false;
       for (SelectedEffect& later : chosen)
         if (later.first_col > s.first_col) later.first_col -= kc;
       chosen.erase(chosen.begin() + static_cast<std::ptrdiff_t>(i));
@@ -206,6 +261,8 @@ class Selector {
   Selection sel_;
   std::set<std::string> used_;           ///< effect/axis taken
   std::map<std::string, double> hints_;  ///< nonlinear parameters scanned at an earlier step
+  std::map<const Candidate*, CandidateTest> tests_;  ///< the last test of each candidate
+  std::map<const Candidate*, TestDesign> designs_;   ///< rank and look-elsewhere, first step
 };
 
 }  // namespace

@@ -1,6 +1,8 @@
-// Selection (docs/explain.md): forward, one effect per step; a step must
-// lower BIC by more than 10 and, when the recording has two runs or more,
-// lower the leave-one-run-out RMS by more than 5 %. Candidates whose columns
+// Selection (docs/explain.md): forward, one effect per step, the best by
+// BIC first; a step must pass the likelihood-ratio test of detection.h at
+// the family-wise level kFamilyAlpha (look-elsewhere and the number of
+// candidates corrected for) and, when the recording has two runs or more,
+// lower the leave-one-run-out RMS. Candidates whose columns
 // the current model already spans are not estimable here; candidates that
 // explain the same structure as the best one (fitted values correlated
 // > 0.98, a BIC within the selection margin) are reported as confounded,
@@ -15,6 +17,7 @@
 
 #include "core/explain/candidate.h"
 #include "core/explain/candidate_fit.h"
+#include "core/explain/detection.h"
 #include "core/explain/linear_model.h"
 
 namespace volmap::explanation {
@@ -29,11 +32,24 @@ struct SelectedEffect {
   Eigen::Index first_col = 0;  ///< its columns in the final model
 };
 
+/// The test of one candidate at the last step it was tried (its entry step
+/// when it became a finding).
+struct CandidateTest {
+  const Candidate* cand = nullptr;
+  double theta = 0;       ///< its fitted nonlinear parameter
+  double chi2 = 0;        ///< likelihood-ratio statistic
+  double p_value = 1;     ///< corrected (look-elsewhere and family)
+  TestDesign design;      ///< how it was tested
+  bool taken = false;     ///< entered the model (finding or confounded)
+  bool estimable = true;  ///< false: the model already spans its columns
+};
+
 struct Selection {
   LinearModel model;  ///< the final model, fitted
   std::optional<double> heldout_rms_um;
   std::vector<SelectedEffect> chosen;
-  std::set<std::string> not_estimable;  ///< "effect AXIS (variant)"
+  std::vector<CandidateTest> tests;  ///< every candidate tried, in candidate order
+  double first_family = 1;           ///< candidates tried in the first step
 };
 
 /// Runs the forward selection from the fitted baseline, then the backward
