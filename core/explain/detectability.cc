@@ -66,7 +66,9 @@ std::vector<CandidateResult> candidate_results(const CandidateContext& ctx, cons
       out.push_back(std::move(r));
       continue;
     }
-    r.at = quoted_at(c, t.theta);
+    const auto asked = ctx.options.detectable_at.find(c.key());
+    const double theta = asked != ctx.options.detectable_at.end() ? asked->second : t.theta;
+    r.at = quoted_at(c, theta);
     const auto chosen = std::find_if(sel.chosen.begin(), sel.chosen.end(),
                                      [&](const SelectedEffect& s) { return s.fitted.cand == &c; });
     if (chosen != sel.chosen.end())
@@ -81,7 +83,7 @@ std::vector<CandidateResult> candidate_results(const CandidateContext& ctx, cons
                                 c.nonlinear);
       fit(obs, reference);
     }
-    const ColumnBlock b = make_column_block(obs, c.build(t.theta), c.per_run);
+    const ColumnBlock b = make_column_block(obs, c.build(theta), c.per_run);
     const Eigen::MatrixXd P = projected_out(reference, b.cols);
     // physical coefficient = normalised * scale: S_phys = D^-1 S D^-1
     const Eigen::VectorXd inv = b.scale.cwiseInverse();

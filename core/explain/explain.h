@@ -63,6 +63,11 @@ struct ExplainOptions {
   /// as ISO 230-2 evaluates positioning; cubic for denser sampling).
   int degree = 0;
   int max_findings = 6;
+  /// The nonlinear parameter a candidate's detectable size is quoted at, by
+  /// candidate key ("cyclic/X/" -> period_mm, "thermal_drift/X/offset/settling"
+  /// -> tau_s, "rotary_wobble/C/" -> order); otherwise at its fitted value.
+  /// For planning a test: how small a 16 mm pitch error would show.
+  std::map<std::string, double> detectable_at;
   bool machine_assumed = false;  ///< the machine is cartesian_machine_for(rec) (no --machine)
   /// Told each stage of the work ("fitting the baseline"), and the
   /// candidates of each selection step as they are fitted (done, total;

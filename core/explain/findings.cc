@@ -31,24 +31,36 @@ BlockEstimate block_estimate(const LinearModel& model, const Eigen::MatrixXd& Gi
   return {beta, cov};
 }
 
-// Standard error of the nonlinear parameter from the curvature of the
-// profile RSS (other terms of the final model held).
-double nonlinear_standard_error(const Observations& obs, const LinearModel& model, double sigma2,
-                                const SelectedEffect& s) {
+// A candidate with a fitted nonlinear parameter (tau_s, period_mm): the
+// covariance of the whole fit by Gauss-Newton, the model's columns beside
+// the derivative of the candidate's fitted term with respect to theta, so
+// that the amplitudes' standard errors carry theta's uncertainty (they are
+// correlated: a longer tau trades against a larger amplitude). Returns
+// theta's standard error and replaces est.cov; NaN and est unchanged when
+// the candidate has no refined parameter or the derivative vanishes.
+double with_nonlinear_uncertainty(const Observations& obs, const LinearModel& model, double sigma2,
+                                  const SelectedEffect& s, BlockEstimate& est) {
   const Candidate& c = *s.fitted.cand;
-  double theta_se = std::nan("");
-  if (!c.refine) return theta_se;
+  if (!c.refine) return std::nan("");
+  const double th = s.fitted.theta, h = std::abs(th) * 1e-4;
+  const Eigen::MatrixXd dC = (c.build(th + h) - c.build(th - h)) / (2 * h);
+  Eigen::VectorXd d = (dC * est.beta).cwiseProduct(obs.sqrt_weight);
+  const double d_rms = std::sqrt(d.squaredNorm() / static_cast<double>(obs.count));
+  if (!(d_rms > 0)) return std::nan("");
+  d /= d_rms;
+  const Eigen::Index k = model.k();
+  Eigen::MatrixXd J(model.X.rows(), k + 1);
+  J.leftCols(k) = model.X;
+  J.col(k) = d;
+  Eigen::MatrixXd G = J.transpose() * J;
+  G.diagonal().array() += ridge_of(obs);
+  const Eigen::MatrixXd Ginv = G.ldlt().solve(Eigen::MatrixXd::Identity(k + 1, k + 1));
   const Eigen::Index kc = s.fitted.block.cols.cols();
-  LinearModel rest = without_block(model, s.first_col, kc, c.nonlinear);
-  fit(obs, rest);
-  const double th = s.fitted.theta, h = th * 1e-3;
-  auto rss_at = [&](double x) {
-    return profile(obs, rest, make_column_block(obs, c.build(x), c.per_run)).rss;
-  };
-  const double f0 = rss_at(th), fp = rss_at(th + h), fm = rss_at(th - h);
-  const double curv = (fp - 2 * f0 + fm) / (h * h);
-  if (curv > 0) theta_se = std::sqrt(2 * sigma2 / curv);
-  return theta_se;
+  for (Eigen::Index a = 0; a < kc; ++a)
+    for (Eigen::Index b = 0; b < kc; ++b)
+      est.cov(a, b) = sigma2 * Ginv(s.first_col + a, s.first_col + b) *
+                      model.scale[s.first_col + a] * model.scale[s.first_col + b];
+  return std::sqrt(sigma2 * Ginv(k, k)) / d_rms;
 }
 
 // Plot: partial residual (final residual + this term) before, final residual after.
@@ -75,8 +87,8 @@ ExplainPlot partial_residual_plot(const Observations& obs, const LinearModel& mo
 Finding finding_of(const Observations& obs, const LinearModel& model, const Eigen::MatrixXd& Ginv,
                    double sigma2, const SelectedEffect& s) {
   const Candidate& c = *s.fitted.cand;
-  const BlockEstimate est = block_estimate(model, Ginv, sigma2, s);
-  const double theta_se = nonlinear_standard_error(obs, model, sigma2, s);
+  BlockEstimate est = block_estimate(model, Ginv, sigma2, s);
+  const double theta_se = with_nonlinear_uncertainty(obs, model, sigma2, s, est);
   Finding f;
   f.effect = c.effect;
   f.axis = c.axis;

@@ -207,11 +207,32 @@ class Selector {
       const Eigen::VectorXd g_fitted = profile(obs_, model, g.block, true).fitted;
       const double rho = correlation(f.gain.fitted, g_fitted);
       if (std::abs(rho) < kConfoundCorrelation) continue;
+      // Nested (a squareness is a sag's linear term): the smaller one is the
+      // parsimonious explanation, and the larger one's extra columns get
+      // their own test at the next step. Not two readings of one structure.
+      if (nested(f.block, g.block)) continue;
       add_confounded_once(confounded_, same_structure(obs_, f, g, rho));
       used_.insert(used_key(*g.cand));
       return true;
     }
     return false;
+  }
+
+  /// Whether the columns of the smaller block lie in the span of the larger
+  /// one's (with the model): each keeps under 1e-6 of its squared norm when
+  /// projected. Blocks of as many columns are never nested: with the same
+  /// span they are two physics with one signature (reversal and servo lag
+  /// at one feed), which is confounding.
+  bool nested(const ColumnBlock& a, const ColumnBlock& b) const {
+    if (a.cols.cols() == b.cols.cols()) return false;
+    const bool a_smaller = a.cols.cols() < b.cols.cols();
+    const ColumnBlock& small = a_smaller ? a : b;
+    LinearModel with_large = with_block(sel_.model, a_smaller ? b : a, 0);
+    fit(obs_, with_large);
+    const Eigen::MatrixXd rest = projected_out(with_large, small.cols);
+    for (Eigen::Index j = 0; j < rest.cols(); ++j)
+      if (rest.col(j).squaredNorm() > 1e-6 * small.cols.col(j).squaredNorm()) return false;
+    return true;
   }
 
   // Backward check: a finding chosen early can become redundant once later
