@@ -58,7 +58,10 @@ PolynomialDegrees polynomial_degrees(const Observations& obs, const ExplainOptio
   return degrees;
 }
 
-/// The instrument zero: a constant per recorded component.
+/// The instrument zero: a constant per recorded component. A projection
+/// reading also sees where the instrument was set up: a constant offset in
+/// each direction, p_w . c (a ballbar's centre against the programmed one;
+/// along a fixed beam it is the constant again, which the rank test drops).
 void add_component_constants(const Observations& obs, std::vector<Eigen::VectorXd>& cols) {
   const Eigen::Index n = static_cast<Eigen::Index>(obs.count);
   for (int g = 0; g < kComponentKinds; ++g) {
@@ -66,6 +69,13 @@ void add_component_constants(const Observations& obs, std::vector<Eigen::VectorX
     Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
     for (Eigen::Index e = 0; e < n; ++e)
       if (obs.component[static_cast<std::size_t>(e)] == g) c[e] = 1.0;
+    cols.push_back(c);
+  }
+  if (!obs.has_component[kProjection]) return;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
+    for (Eigen::Index e = 0; e < n; ++e)
+      if (obs.component[static_cast<std::size_t>(e)] == kProjection) c[e] = obs.direction_wp(k, e);
     cols.push_back(c);
   }
 }

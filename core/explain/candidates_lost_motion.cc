@@ -48,7 +48,7 @@ Candidate servo_lag_candidate(const Observations& obs, AxisName k, const Eigen::
   sl.build = [&obs, k, along_k](double) {
     return one_column(obs, [&](Eigen::Index e) {
       const int i = obs.recording_row[static_cast<std::size_t>(e)];
-      return -along_k[e] * obs.feed_mm_per_min(i) / 1000.0 * obs.approach(k, i);
+      return -along_k[e] * obs.feed_mm_per_min(i) / 1000.0 * obs.moving(k, i);
     });
   };
   sl.report = one_coefficient_report("um_per_m_min", [k](double um_per_m_min) {
@@ -59,7 +59,7 @@ Candidate servo_lag_candidate(const Observations& obs, AxisName k, const Eigen::
         "standstill.",
         axis_letter(k), um_per_m_min);
   });
-  sl.plot_x = [&obs, k](int i) { return obs.feed_mm_per_min(i) * obs.approach(k, i); };
+  sl.plot_x = [&obs, k](int i) { return obs.feed_mm_per_min(i) * obs.moving(k, i); };
   sl.plot_label = "feed_mm_min * " + dir_column_name(k);
   return sl;
 }

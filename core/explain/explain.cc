@@ -9,6 +9,7 @@
 
 #include "core/explain/baseline_model.h"
 #include "core/explain/candidate.h"
+#include "core/explain/circular.h"
 #include "core/explain/confounding.h"
 #include "core/explain/findings.h"
 #include "core/explain/linear_model.h"
@@ -137,6 +138,7 @@ ExplainResult explain(const Machine& m, const Recordings& rec, const ExplainOpti
   res.final_heldout_rms_um = sel.heldout_rms_um;
   report_findings(ctx, sel, res);
   res.candidates = candidate_results(ctx, sel);
+  res.circular_tests = circular_tests(obs, obs.deviation_um, residual_um(obs, sel.model));
   add_notes(ctx, res);
   return res;
 }

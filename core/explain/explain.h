@@ -125,6 +125,26 @@ struct CandidateResult {
   std::optional<std::pair<std::string, double>> at;  ///< the nonlinear parameter it was quoted at
 };
 
+/// A circular test (ISO 230-4, the ballbar) found in the recording: one
+/// circle at one feed, its counter-clockwise and clockwise runs. Deviations
+/// are radial, after the least-squares circle (centre offset and radius
+/// error removed, as ISO 230-4 evaluates): `deviation_um` as recorded (less
+/// a fixed baseline's prediction), `fitted_um` the part the findings explain.
+struct CircularTest {
+  std::string plane;  ///< "XY", "YZ", "ZX"
+  Eigen::Vector3d centre_mm = Eigen::Vector3d::Zero();
+  double radius_mm = 0, feed_mm_min = 0;
+  struct Path {
+    std::string run;        ///< as the recording names it
+    std::string direction;  ///< "ccw" (angle rising from the first plane axis) or "cw"
+    std::vector<double> angle_deg, deviation_um, fitted_um;
+    double g_um = 0;        ///< circular deviation G of the recording
+    double g_after_um = 0;  ///< G of what the findings leave
+  };
+  std::vector<Path> paths;
+  std::optional<double> h_um, h_after_um;  ///< circular hysteresis H (both directions)
+};
+
 struct ExplainResult {
   std::string recordings_file;
   std::size_t observations = 0;  ///< scalar equations
@@ -135,7 +155,8 @@ struct ExplainResult {
   std::vector<Mismatch> mismatch;
   std::vector<Finding> findings;
   std::vector<Confounded> confounded;
-  std::vector<CandidateResult> candidates;  ///< every candidate tested, in a fixed order
+  std::vector<CandidateResult> candidates;   ///< every candidate tested, in a fixed order
+  std::vector<CircularTest> circular_tests;  ///< ISO 230-4 readings, when the recording has any
   double final_rms_um = 0.0;
   std::optional<double> final_heldout_rms_um;
   std::vector<std::string> notes;  ///< candidates not estimable on this recording, etc.

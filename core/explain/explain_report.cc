@@ -8,6 +8,7 @@
 
 #include "core/common/html.h"
 #include "core/common/svg_plot.h"
+#include "core/explain/circular_report.h"
 #include "core/explain/explain.h"
 #include "core/explain/parameter_report.h"
 
@@ -191,6 +192,7 @@ nlohmann::ordered_json explain_json(const ExplainResult& r) {
   j["final"] = {{"rms_um", json_number(r.final_rms_um)},
                 {"heldout_rms_um", json_number(r.final_heldout_rms_um)}};
   j["candidates"] = candidates_json(r.candidates);
+  if (!r.circular_tests.empty()) j["circular_tests"] = explanation::circular_json(r.circular_tests);
   j["notes"] = r.notes;
   return j;
 }
@@ -225,6 +227,7 @@ std::string explain_text(const ExplainResult& r) {
   }
   s << fmt::format("final: rms {:.3f} µm, held-out rms {}\n", r.final_rms_um,
                    opt_um(r.final_heldout_rms_um));
+  s << explanation::circular_text(r.circular_tests);
   return s.str();
 }
 
@@ -322,6 +325,7 @@ std::string explain_html(const ExplainResult& r) {
       << (f.plot.group.empty() ? "" : "Red: approached from +, blue: approached from &minus;. ")
       << "Black dashes: the finding's fitted term at each point.</p>\n";
   }
+  s << explanation::circular_html(r.circular_tests);
   if (!r.candidates.empty()) s << candidates_html(r.candidates);
   if (!r.notes.empty()) {
     s << "<h2>Notes</h2>\n<ul>\n";

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/explain/confounding.h"
+#include "core/explain/parameter_report.h"
 
 namespace volmap::explanation {
 namespace {
@@ -84,6 +85,31 @@ ExplainPlot partial_residual_plot(const Observations& obs, const LinearModel& mo
   return plot;
 }
 
+// The same effect on two axes with one signature: the finding is this
+// axis's value less the other's. For servo lag on a circular test that is
+// the servo mismatch, which ballbar software quotes in milliseconds: a lag of
+// c um per m/min is a time constant of c / (1000 um/mm * 1000 mm/min / 60 s)
+// = 0.06 c ms.
+void relative_finding(AxisName other, Finding& f) {
+  f.parameters.push_back({"relative_to_axis", axis_letter(other)});
+  const std::string k = f.axis ? axis_letter(*f.axis) : std::string("-");
+  f.explanation += fmt::format(
+      " This recording shows only the difference between {0} and {1} (the same signature on "
+      "both axes): the value is {0}'s less {1}'s.",
+      k, axis_letter(other));
+  if (f.effect != "servo_lag") return;
+  const double c = f.parameters.front().second.get<double>();
+  double se = 0;
+  for (const auto& [name, v] : f.std_errors)
+    if (name == "um_per_m_min") se = v;
+  f.parameters.push_back({"mismatch_ms", json_number(0.06 * c)});
+  f.std_errors.push_back({"mismatch_ms", 0.06 * se});
+  f.explanation += fmt::format(
+      " Servo mismatch: {} responds {:.3g} ms later than {} (ISO 230-4 circular test: an "
+      "ellipse along the diagonals that turns with the direction of travel).",
+      k, 0.06 * c, axis_letter(other));
+}
+
 Finding finding_of(const Observations& obs, const LinearModel& model, const Eigen::MatrixXd& Ginv,
                    double sigma2, const SelectedEffect& s) {
   const Candidate& c = *s.fitted.cand;
@@ -99,6 +125,7 @@ Finding finding_of(const Observations& obs, const LinearModel& model, const Eige
   f.heldout_rms_after_um = s.heldout_after_um;
   f.delta_bic = s.delta_bic;
   f.plot = partial_residual_plot(obs, model, s);
+  if (s.relative_to) relative_finding(*s.relative_to, f);
   return f;
 }
 

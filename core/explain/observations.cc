@@ -165,6 +165,28 @@ void pack_equations(Observations& obs, const EquationList& eqs) {
 }
 
 /// The equations of each run; runs without equations do not count.
+/// The direction of motion to each row (Observations::move_direction).
+void find_move_directions(Observations& obs) {
+  const Recordings& rec = obs.recordings;
+  const int rows = static_cast<int>(rec.size());
+  obs.move_direction = Eigen::Matrix3Xd::Zero(3, rows);
+  auto at = [&](int i) {
+    Eigen::Vector3d p;
+    for (int k = 0; k < 3; ++k) p[k] = obs.position(static_cast<AxisName>(k), i);
+    return p;
+  };
+  auto same_run = [&](int a, int b) { return !rec.has_run() || rec.run[a] == rec.run[b]; };
+  constexpr double kMoved_mm = 1e-9;
+  for (int i = 0; i < rows; ++i) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    if (i > 0 && same_run(i - 1, i)) d = at(i) - at(i - 1);
+    if (d.norm() < kMoved_mm && i + 1 < rows && same_run(i, i + 1)) d = at(i + 1) - at(i);
+    if (d.norm() < kMoved_mm)
+      for (int k = 0; k < 3; ++k) d[k] = obs.approach(static_cast<AxisName>(k), i);
+    if (d.norm() > 0) obs.move_direction.col(i) = d.normalized();
+  }
+}
+
 void group_runs(Observations& obs) {
   obs.equations_of_run.assign(static_cast<std::size_t>(obs.run_count), {});
   for (std::size_t e = 0; e < obs.count; ++e)
@@ -204,6 +226,7 @@ Observations build_observations(const Machine& m, const Recordings& rec,
                      fmt::format("{} usable observations; explain needs at least 4", obs.count));
   pack_equations(obs, eqs);
   group_runs(obs);
+  find_move_directions(obs);
   return obs;
 }
 

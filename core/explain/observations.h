@@ -39,6 +39,12 @@ struct Observations {
   std::vector<std::string> error_names;  ///< error names of error_gain's columns
   int run_count = 1;
   std::vector<std::vector<int>> equations_of_run;
+  /// Per recording row: the unit direction of motion of the linear axes
+  /// (X, Y, Z components) on the way to it, from the recorded positions:
+  /// the chord from the run's previous row, else to its next row (a laser
+  /// pass's first target, the turnaround), else the approach directions.
+  /// A circular test's rows get the tangent, a laser's the pass direction.
+  Eigen::Matrix3Xd move_direction;
   bool has_component[kComponentKinds] = {false, false, false, false};
 
   Observations(const Machine& m, const Recordings& rec) : machine(m), recordings(rec) {}
@@ -62,6 +68,10 @@ struct Observations {
   }
   double time_s(int i) const {
     return recordings.t_s.empty() ? std::nan("") : recordings.t_s[static_cast<std::size_t>(i)];
+  }
+  /// Component of the direction of motion along machine axis a at row i.
+  double moving(AxisName a, int i) const {
+    return is_rotary(a) ? 0.0 : move_direction(static_cast<int>(a), i);
   }
   double feed_mm_per_min(int i) const {
     if (recordings.feed_mm_min.empty()) return 0.0;

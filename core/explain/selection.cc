@@ -179,7 +179,7 @@ class Selector {
       s.heldout_before_um = sel_.heldout_rms_um;
       s.heldout_after_um = ho;
       s.first_col = model.k();
-      s.confounded = find_confounded(f, fits);
+      s.confounded = find_confounded(f, fits, s.relative_to);
       used_.insert(used_key(*f.cand));
       tests_[f.cand].taken = true;
       s.fitted = std::move(f);
@@ -193,7 +193,8 @@ class Selector {
 
   /// Confounding: another candidate explains the same structure almost as
   /// well. Reports the pair and takes the other out of the search.
-  bool find_confounded(FittedCandidate& f, const std::vector<FittedCandidate>& fits) {
+  bool find_confounded(FittedCandidate& f, const std::vector<FittedCandidate>& fits,
+                       std::optional<AxisName>& relative_to) {
     const LinearModel& model = sel_.model;
     const double gain_best = model.rss - f.gain.rss;
     for (const FittedCandidate& g : fits) {
@@ -201,16 +202,35 @@ class Selector {
       if (g.cand->effect == f.cand->effect && g.cand->axis == f.cand->axis) continue;
       // Nearly as good by the same measure (BIC within the selection margin)
       // and the same structure (fitted deviations correlated).
-      if (g.bic - f.bic > -kMinDeltaBic) continue;
       if (model.rss - g.gain.rss < kConfoundGainShare * gain_best) continue;
+      const bool bic_close = g.bic - f.bic <= -kMinDeltaBic;
+      const bool sizes_differ = g.block.cols.cols() != f.block.cols.cols();
+      if (!bic_close && !sizes_differ) continue;
       if (f.gain.fitted.size() == 0) f.gain = profile(obs_, model, f.block, true);
       const Eigen::VectorXd g_fitted = profile(obs_, model, g.block, true).fitted;
       const double rho = correlation(f.gain.fitted, g_fitted);
       if (std::abs(rho) < kConfoundCorrelation) continue;
       // Nested (a squareness is a sag's linear term): the smaller one is the
       // parsimonious explanation, and the larger one's extra columns get
-      // their own test at the next step. Not two readings of one structure.
-      if (nested(f.block, g.block)) continue;
+      // their own test at the next step. Not two readings of one structure,
+      // unless the larger one's leading columns alone (a scale error's
+      // linear term beside a pitch with its Abbe lever) are as good an
+      // account as the smaller: two physics of one size, confounded, whatever
+      // BIC charges the larger one for its extra columns.
+      if (sizes_differ && nested(f.block, g.block)) {
+        if (larger_adds_something(f, g) || !leading_part_explains(f, g)) continue;
+      } else if (!bic_close) {
+        continue;
+      }
+      // One effect on two axes with one signature (the lags of X and Y on
+      // a circle): not two physics but a difference the design shows, the
+      // split between the axes it cannot. A finding relative to the other.
+      if (g.cand->effect == f.cand->effect && g.block.cols.cols() == f.block.cols.cols() &&
+          std::abs(rho) > 0.999) {
+        relative_to = g.cand->axis;
+        used_.insert(used_key(*g.cand));
+        continue;
+      }
       add_confounded_once(confounded_, same_structure(obs_, f, g, rho));
       used_.insert(used_key(*g.cand));
       return true;
@@ -233,6 +253,39 @@ class Selector {
     for (Eigen::Index j = 0; j < rest.cols(); ++j)
       if (rest.col(j).squaredNorm() > 1e-6 * small.cols.col(j).squaredNorm()) return false;
     return true;
+  }
+
+  /// Whether the larger of two nested candidates explains significantly more
+  /// than the smaller (its extra columns pass the detection test): then it
+  /// is the better account (a scale with the curvature of the positioning
+  /// error, against a pitch that has only the slope).
+  bool larger_adds_something(const FittedCandidate& f, const FittedCandidate& g) const {
+    const bool f_larger = f.block.cols.cols() > g.block.cols.cols();
+    const FittedCandidate& large = f_larger ? f : g;
+    const FittedCandidate& small = f_larger ? g : f;
+    TestDesign d;
+    d.columns = static_cast<double>(large.block.cols.cols() - small.block.cols.cols());
+    d.residual_dof =
+        std::max(1.0, static_cast<double>(obs_.count) - static_cast<double>(sel_.model.k()) -
+                          static_cast<double>(large.block.cols.cols()));
+    return corrected_p_value(statistic(small.gain.rss, large.gain.rss, d), d) < kFamilyAlpha;
+  }
+
+  /// Whether the leading columns of the larger of two nested candidates, as
+  /// many as the smaller has, explain the smaller's structure (fitted
+  /// deviations correlated above kConfoundCorrelation).
+  bool leading_part_explains(FittedCandidate& f, const FittedCandidate& g) const {
+    const bool f_smaller = f.block.cols.cols() < g.block.cols.cols();
+    const ColumnBlock& large = f_smaller ? g.block : f.block;
+    const Eigen::Index k = std::min(f.block.cols.cols(), g.block.cols.cols());
+    ColumnBlock lead;
+    lead.cols = large.cols.leftCols(k);
+    lead.scale = large.scale.head(k);
+    lead.per_run = large.per_run;
+    const Eigen::VectorXd small_fit =
+        f_smaller ? f.gain.fitted : profile(obs_, sel_.model, g.block, true).fitted;
+    return std::abs(correlation(profile(obs_, sel_.model, lead, true).fitted, small_fit)) >=
+           kConfoundCorrelation;
   }
 
   // Backward check: a finding chosen early can become redundant once later

@@ -26,6 +26,9 @@ namespace volmap::explanation {
 struct SelectedEffect {
   FittedCandidate fitted;
   bool confounded = false;  ///< another effect explains the same structure
+  /// The same effect on this axis gives the same structure: the finding is
+  /// the difference of the two (servo mismatch on a circle).
+  std::optional<AxisName> relative_to;
   double rms_before_um = 0, rms_after_um = 0;
   std::optional<double> heldout_before_um, heldout_after_um;
   double delta_bic = 0;

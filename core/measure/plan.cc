@@ -11,6 +11,7 @@
 #include "core/common/json_input.h"
 #include "core/common/units.h"
 #include "core/kinematics/kinematics.h"
+#include "core/measure/circular_test.h"
 
 namespace volmap {
 namespace {
@@ -158,9 +159,9 @@ class Expander {
     return c;
   }
 
-  /// Moves to u and takes a reading there.
+  /// Moves to u and takes a reading there (record: false, only moves).
   void visit(const JsonObject& t, const AxisVector& target, const Common& c, double feed,
-             int forced_axis = -1, int forced_sign = 0) {
+             int forced_axis = -1, int forced_sign = 0, bool record = true) {
     if (++points_ > kMaxPlanPoints)
       t.fail("", fmt::format("the plan has more than {:g} points; use larger steps or fewer cycles",
                              kMaxPlanPoints));
@@ -197,6 +198,7 @@ class Expander {
     t_ += (feed > 0 && dist > kStill) ? dist / feed * 60.0 : c.move_s;
     t_ += c.dwell_s;
     cur_ = u;
+    if (!record) return;
     PlannedPoint p;
     p.u = u;
     p.dir = dir_;
@@ -220,10 +222,12 @@ class Expander {
       expand_grid(t);
     } else if (type == "points") {
       expand_points(t);
+    } else if (type == "circular") {
+      expand_circular(t);
     } else {
-      t.fail("type",
-             fmt::format("unknown test type \"{}\"; expected laser, probe_ball, grid or points",
-                         type));
+      t.fail("type", fmt::format("unknown test type \"{}\"; expected laser, probe_ball, grid, "
+                                 "points or circular",
+                                 type));
     }
   }
 
@@ -393,6 +397,50 @@ class Expander {
         for (const AxisVector& u : us) visit(t, u, c, feed);
         t_ += c.pause_s;
       }
+  }
+
+  /// A circular test (ISO 230-4, circular_test.h): each cycle and feed runs
+  /// counter-clockwise, then clockwise ("direction": "both"), each a run.
+  void expand_circular(const JsonObject& t) {
+    t.allow_only({"type", "description", "plane", "center", "radius_mm", "direction", "start_deg",
+                  "step_deg", "overshoot_deg", "cycles", "dwell_s", "pause_s", "feed_mm_min"});
+    if (!t.has("feed_mm_min")) t.fail("", "a circular test needs \"feed_mm_min\"");
+    Common c = common(t, 0);
+    if (!t.has("dwell_s")) c.dwell_s = 0;
+    c.projection = true;
+    plan_.any_projection = true;
+    const std::string plane = t.string_or("plane", "XY");
+    const std::optional<AxisName> a1 = plane.size() == 2 ? axis_from_char(plane[0]) : std::nullopt,
+                                  a2 = plane.size() == 2 ? axis_from_char(plane[1]) : std::nullopt;
+    if (!a1 || !a2) t.fail("plane", "expected two axis letters such as \"XY\", \"YZ\" or \"ZX\"");
+    CircularTestPath path{.first = *a1, .second = *a2, .centre = cur_};
+    if (t.has("center")) path.centre = positions_from(t.object("center"), cur_);
+    path.radius_mm = t.number("radius_mm");
+    path.start_deg = t.number_or("start_deg", 0.0);
+    path.step_deg = t.number_or("step_deg", 1.0);
+    path.overshoot_deg = t.number_or("overshoot_deg", 90.0);
+    const std::string direction = t.string_or("direction", "both");
+    if (direction != "both" && direction != "ccw" && direction != "cw")
+      t.fail("direction", "expected \"both\", \"ccw\" or \"cw\"");
+    std::vector<bool> senses;
+    if (direction != "cw") senses.push_back(true);
+    if (direction != "ccw") senses.push_back(false);
+    for (double feed : c.feeds)
+      for (int cycle = 0; cycle < c.cycles; ++cycle)
+        for (bool ccw : senses) {
+          ++run_;
+          std::vector<CircularStop> stops;
+          try {
+            stops = circular_run(m_, path, ccw);
+          } catch (const std::invalid_argument& e) {
+            t.fail("", e.what());
+          }
+          for (const CircularStop& s : stops) {
+            c.beam = s.radial;
+            visit(t, s.u, c, feed, -1, 0, s.capture);
+          }
+          t_ += c.pause_s;
+        }
   }
 
   std::string file_;
