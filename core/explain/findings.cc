@@ -104,10 +104,13 @@ void relative_finding(AxisName other, Finding& f) {
     if (name == "um_per_m_min") se = v;
   f.parameters.push_back({"mismatch_ms", json_number(0.06 * c)});
   f.std_errors.push_back({"mismatch_ms", 0.06 * se});
-  f.explanation += fmt::format(
-      " Servo mismatch: {} responds {:.3g} ms later than {} (ISO 230-4 circular test: an "
-      "ellipse along the diagonals that turns with the direction of travel).",
-      k, 0.06 * c, axis_letter(other));
+  const std::string late = c >= 0 ? k : axis_letter(other), early = c >= 0 ? axis_letter(other) : k;
+  f.explanation = fmt::format(
+      "{0} lags {1:.3g} µm per m/min of feed more than {2} (the lag of {3} less that of {4} is "
+      "{5:.3g}): servo mismatch, {0} responds {6:.3g} ms later than {2}. On a circular test "
+      "(ISO 230-4) an ellipse along the diagonals that turns with the direction of travel; the "
+      "circle shows the difference of the two axes' lags, not each.",
+      late, std::abs(c), early, k, axis_letter(other), c, std::abs(0.06 * c));
 }
 
 Finding finding_of(const Observations& obs, const LinearModel& model, const Eigen::MatrixXd& Ginv,

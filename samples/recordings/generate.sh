@@ -33,3 +33,4 @@ sim thermal-temperature $m3 samples/errors/hsu-3axis.csv
 sim sag                 $m3 samples/errors/hsu-3axis.csv
 sim rotary-wobble       $m5 samples/errors/lei-hsu-xyzac.csv
 sim rotary-positioning  $m5 samples/errors/lei-hsu-xyzac.csv
+sim ballbar             $m3 samples/errors/hsu-3axis.csv

@@ -177,3 +177,34 @@ TEST(ExplainCircular, ReportHasTheReadingsAndThePolarPlots) {
 
 }  // namespace
 }  // namespace volmap
+
+namespace volmap {
+namespace {
+
+TEST(ExplainCircular, BallbarSampleUnderTheMachinesGeometry) {
+  // samples/recordings/ballbar: backlash of X 3 um and Y lagging 1 um per
+  // m/min more than X, under the sample machine's geometric error (the
+  // fixed baseline).
+  const explain_testing::json res = explain_testing::run_explain(
+      "samples/recordings/ballbar.csv", explain_testing::kM3, "samples/errors/hsu-3axis.csv");
+  const auto& f = res.at("findings");
+  ASSERT_EQ(f.size(), 2u) << f.dump(1);
+  EXPECT_EQ(f.at(0).at("effect"), "reversal");
+  EXPECT_EQ(f.at(0).at("axis"), "X");
+  EXPECT_NEAR(f.at(0).at("parameters").at("value_um").get<double>(), 3.0,
+              3 * f.at(0).at("std_errors").at("value_um").get<double>());
+  EXPECT_EQ(f.at(1).at("effect"), "servo_lag");
+  // the lag of Y less that of X is 1, however the finding names the pair
+  const double c = f.at(1).at("parameters").at("um_per_m_min").get<double>();
+  const double y_less_x = f.at(1).at("axis") == "Y" ? c : -c;
+  EXPECT_NEAR(y_less_x, 1.0, 3 * f.at(1).at("std_errors").at("um_per_m_min").get<double>());
+  EXPECT_NE(f.at(1).at("explanation").get<std::string>().find("Y lags"), std::string::npos);
+  ASSERT_EQ(res.at("circular_tests").size(), 2u);
+  for (const auto& t : res.at("circular_tests")) {
+    EXPECT_GT(t.at("h_um").get<double>(), 3.0);  // the backlash opens the two directions
+    EXPECT_LT(t.at("h_after_um").get<double>(), 2 * 5 * 0.3 * std::sqrt(2.0));
+  }
+}
+
+}  // namespace
+}  // namespace volmap
