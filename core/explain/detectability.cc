@@ -15,6 +15,7 @@ std::optional<std::pair<std::string, double>> quoted_at(const Candidate& c, doub
   if (c.grid.empty()) return std::nullopt;
   if (c.effect == "cyclic") return std::pair<std::string, double>{"period_mm", theta};
   if (c.effect == "thermal_drift") return std::pair<std::string, double>{"tau_s", theta};
+  if (c.effect == "reversal") return std::pair<std::string, double>{"length_mm", theta};
   return std::pair<std::string, double>{"order", theta};
 }
 

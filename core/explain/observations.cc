@@ -185,6 +185,19 @@ void find_move_directions(Observations& obs) {
       for (int k = 0; k < 3; ++k) d[k] = obs.approach(static_cast<AxisName>(k), i);
     if (d.norm() > 0) obs.move_direction.col(i) = d.normalized();
   }
+  obs.since_reversal_mm = Eigen::Matrix3Xd::Constant(3, rows, INFINITY);
+  Eigen::Vector3d reversed_at = Eigen::Vector3d::Constant(NAN);
+  for (int i = 0; i < rows; ++i) {
+    if (i == 0 || !same_run(i - 1, i)) reversed_at.setConstant(NAN);
+    for (int k = 0; k < 3; ++k) {
+      const AxisName a = static_cast<AxisName>(k);
+      if (i > 0 && same_run(i - 1, i) && obs.approach(a, i - 1) != 0 &&
+          obs.approach(a, i) != obs.approach(a, i - 1))
+        reversed_at[k] = obs.position(a, i - 1);
+      if (!std::isnan(reversed_at[k]))
+        obs.since_reversal_mm(k, i) = std::abs(obs.position(a, i) - reversed_at[k]);
+    }
+  }
 }
 
 void group_runs(Observations& obs) {

@@ -45,6 +45,10 @@ struct Observations {
   /// pass's first target, the turnaround), else the approach directions.
   /// A circular test's rows get the tangent, a laser's the pass direction.
   Eigen::Matrix3Xd move_direction;
+  /// Per recording row: how far each linear axis (X, Y, Z) moved since its
+  /// approach direction last flipped within the run (from the turnaround:
+  /// the previous row's position), mm; infinite before the first flip.
+  Eigen::Matrix3Xd since_reversal_mm;
   bool has_component[kComponentKinds] = {false, false, false, false};
 
   Observations(const Machine& m, const Recordings& rec) : machine(m), recordings(rec) {}

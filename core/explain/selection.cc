@@ -22,7 +22,8 @@ constexpr double kConfoundGainShare = 0.9;
 std::string used_key(const Candidate& c) {
   std::string k = c.effect + "/" + (c.axis ? axis_letter(*c.axis) : "-");
   if (c.effect == "squareness" || c.effect == "straightness" || c.effect == "angular" ||
-      (c.effect == "scale" && c.variant.size() > 2))
+      (c.effect == "scale" && c.variant.size() > 2) ||
+      (c.effect == "reversal" && !c.variant.empty()))
     k += "/" + c.variant;
   return k;
 }

@@ -142,15 +142,34 @@ void read_rotary(const JsonObject& o, const Machine& m, const GainEvaluator& gai
   }
 }
 
+void read_reversal(const JsonObject& o, const Machine& m, Effect& e) {
+  o.allow_only({"effect", "description", "axis", "value_um", "kind", "length_mm", "input_axis"});
+  e.axis = linear_axis(o, m, "axis");
+  e.value_um = o.number("value_um");
+  const std::string kind = o.string_or("kind", "step");
+  if (kind == "spike") {
+    e.lost_motion = LostMotion::kSpike;
+    e.length_mm = o.number("length_mm");
+    if (!(e.length_mm > 0)) o.fail("length_mm", "expected a decay length > 0 (mm)");
+  } else if (kind == "lateral") {
+    e.lost_motion = LostMotion::kLateral;
+    e.input_axis = linear_axis(o, m, "input_axis");
+    if (e.input_axis == e.axis) o.fail("input_axis", "expected an axis other than \"axis\"");
+  } else if (kind != "step") {
+    o.fail("kind", "expected \"step\", \"spike\" or \"lateral\"");
+  }
+  for (const char* k : {"length_mm", "input_axis"})
+    if (o.has(k) && !(kind == (std::string(k) == "length_mm" ? "spike" : "lateral")))
+      o.fail(k, fmt::format("not a parameter of a reversal of kind \"{}\"", kind));
+}
+
 Effect read_effect(const JsonObject& o, const Machine& m, const GainEvaluator& gains) {
   Effect e;
   e.path = o.path();
   e.kind = effect_kind(o);
   switch (e.kind) {
     case EffectKind::kReversal:
-      o.allow_only({"effect", "description", "axis", "value_um"});
-      e.axis = linear_axis(o, m, "axis");
-      e.value_um = o.number("value_um");
+      read_reversal(o, m, e);
       break;
     case EffectKind::kThermalDrift:
       read_thermal_drift(o, m, e);
@@ -226,7 +245,14 @@ Eigen::Vector3d effects_deviation_w_mm(const EffectSet& effects, const Machine& 
     switch (e.kind) {
       case EffectKind::kReversal: {
         const int s = ctx.dir[static_cast<std::size_t>(*m.index_of(e.axis))];
-        d_b_um[k] += 0.5 * e.value_um * s;
+        if (e.lost_motion == LostMotion::kStep) {
+          d_b_um[k] += 0.5 * e.value_um * s;
+        } else if (e.lost_motion == LostMotion::kSpike) {
+          d_b_um[k] -= s * e.value_um * std::exp(-ctx.since_reversal_mm[k] / e.length_mm);
+        } else {
+          d_b_um[k] +=
+              0.5 * e.value_um * ctx.dir[static_cast<std::size_t>(*m.index_of(e.input_axis))];
+        }
         break;
       }
       case EffectKind::kThermalDrift: {

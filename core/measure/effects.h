@@ -9,7 +9,11 @@
 // recording frame that is R_w_b * delta * e_axis (nominal R_w_b at the
 // observation; identity for machines without rotary axes). With q_K the
 // axis position (mm), s_K its approach direction, t the time (s):
-//   reversal            delta = s_K value_um / 2   (B = mean(+) - mean(-) = value_um)
+//   reversal            delta = s_K value_um / 2   (B = mean(+) - mean(-) = value_um);
+//                       kind "spike": -s_K value_um exp(-d_K / length_mm), d_K the
+//                       distance K moved since it reversed (the axis sticks, then
+//                       catches up); kind "lateral": s_J value_um / 2, J = input_axis
+//                       (K shifts when J reverses: play across J's guideway)
 //   thermal_drift       delta = f(t) * (1, or (q_K - origin_mm) / reference_length_mm
 //                       for kind "scale"), f(t) = amplitude_um (1 - exp(-t / tau_s)),
 //                       or rate_um_per_h t / 3600, or um_per_k (T(t) - reference_c)
@@ -49,6 +53,10 @@ enum class EffectKind : std::uint8_t {
   kRotaryPositioning
 };
 
+/// The form of a lost motion (reversal): a step, a spike that decays along
+/// the travel after the reversal, or a step of another axis (lateral play).
+enum class LostMotion : std::uint8_t { kStep, kSpike, kLateral };
+
 /// Thermal drift against time or temperature.
 enum class DriftLaw : std::uint8_t { kSettling, kRate, kTemperature };
 
@@ -57,7 +65,9 @@ struct Effect {
   std::string path;  ///< JSON path in the effects file, for messages
   AxisName axis = AxisName::X;
   double value_um = 0.0;  // reversal
-  bool scale = false;     // thermal_drift kind "scale"
+  LostMotion lost_motion = LostMotion::kStep;
+  double length_mm = 0.0;  ///< reversal spike: decay length along the travel
+  bool scale = false;      // thermal_drift kind "scale"
   DriftLaw law = DriftLaw::kSettling;
   double amplitude_um = 0.0, tau_s = 0.0, rate_um_per_h = 0.0, um_per_k = 0.0;
   double reference_c = 20.0;
@@ -86,6 +96,8 @@ struct EffectContext {
   double t_s = 0.0;
   double feed_mm_min = 0.0;  ///< 0: not known / static
   Eigen::Vector3d move_direction = Eigen::Vector3d::Zero();
+  /// Distance each linear axis (X, Y, Z) moved since it last reversed, mm.
+  Eigen::Vector3d since_reversal_mm = Eigen::Vector3d::Constant(INFINITY);
   int run = 0;                 ///< 1-based
   double temperature_c = 0.0;  ///< of the plan's sensor (NaN when none)
 };

@@ -182,6 +182,7 @@ class Expander {
                              at, e.what()));
     }
     Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    const ApproachDirections before = dir_;
     for (int i = 0; i < m_.axis_count(); ++i) {
       const AxisName a = m_.axis_order[static_cast<std::size_t>(i)];
       const double delta = u[i] - cur_[i];
@@ -195,6 +196,7 @@ class Expander {
       const AxisName a = m_.axis_order[static_cast<std::size_t>(forced_axis)];
       move_dir_ = forced_sign * Eigen::Vector3d::Unit(static_cast<int>(a));
     }
+    note_reversals(before, u);
     t_ += (feed > 0 && dist > kStill) ? dist / feed * 60.0 : c.move_s;
     t_ += c.dwell_s;
     cur_ = u;
@@ -206,10 +208,26 @@ class Expander {
     p.run = run_;
     p.feed_mm_min = feed;
     p.move_direction = move_dir_;
+    p.since_reversal_mm = since_reversal_;
     p.record_mask = c.mask;
     p.projection = c.projection;
     p.beam = c.beam;
     plan_.points.push_back(p);
+  }
+
+  /// Where each linear axis last reversed (its position before the move
+  /// that turned it), and how far it is from there at u.
+  void note_reversals(const ApproachDirections& before, const AxisVector& u) {
+    for (int i = 0; i < m_.axis_count(); ++i) {
+      const AxisName a = m_.axis_order[static_cast<std::size_t>(i)];
+      const std::size_t s = static_cast<std::size_t>(i);
+      if (is_rotary(a)) continue;
+      if (before[s] != 0 && dir_[s] != before[s]) reversed_at_[static_cast<int>(a)] = cur_[i];
+      since_reversal_[static_cast<int>(a)] =
+          std::isnan(reversed_at_[static_cast<int>(a)])
+              ? INFINITY
+              : std::abs(u[i] - reversed_at_[static_cast<int>(a)]);
+    }
   }
 
   void expand_test(const JsonObject& t) {
@@ -449,6 +467,8 @@ class Expander {
   AxisVector cur_;
   ApproachDirections dir_{};
   Eigen::Vector3d move_dir_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d reversed_at_ = Eigen::Vector3d::Constant(NAN);          ///< X, Y, Z
+  Eigen::Vector3d since_reversal_ = Eigen::Vector3d::Constant(INFINITY);  ///< X, Y, Z
   double t_ = 0.0;
   int run_ = 0;
   double points_ = 0;  ///< readings planned so far (bounded by kMaxPlanPoints)

@@ -40,6 +40,9 @@ struct PlannedPoint {
   /// Unit direction of the last linear move, in linear-axis coordinates
   /// (X, Y, Z axis values); zero before the first move.
   Eigen::Vector3d move_direction = Eigen::Vector3d::Zero();
+  /// How far each linear axis (X, Y, Z) has moved since its motion last
+  /// reversed, mm; infinite before its first reversal.
+  Eigen::Vector3d since_reversal_mm = Eigen::Vector3d::Constant(INFINITY);
   std::uint8_t record_mask = 0;                    ///< bit c: component c (ex, ey, ez) recorded
   bool projection = false;                         ///< recorded along `beam` (e_um) instead
   Eigen::Vector3d beam = Eigen::Vector3d::Zero();  ///< unit, recording frame

@@ -74,6 +74,7 @@ Recordings simulate(const ErrorModel& model, const Plan& plan, const EffectSet* 
       ctx.t_s = p.t_s;
       ctx.feed_mm_min = p.feed_mm_min;
       ctx.move_direction = p.move_direction;
+      ctx.since_reversal_mm = p.since_reversal_mm;
       ctx.run = p.run;
       ctx.temperature_c = plan.temperature ? plan.temperature->at(p.t_s) : std::nan("");
       d_w_mm += effects_deviation_w_mm(*effects, m, gains, ctx);

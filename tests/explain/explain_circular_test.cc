@@ -175,18 +175,12 @@ TEST(ExplainCircular, ReportHasTheReadingsAndThePolarPlots) {
   EXPECT_NE(explain_text(r).find("circular test XY r 100 mm"), std::string::npos);
 }
 
-}  // namespace
-}  // namespace volmap
-
-namespace volmap {
-namespace {
-
 TEST(ExplainCircular, BallbarSampleUnderTheMachinesGeometry) {
   // samples/recordings/ballbar: backlash of X 3 um and Y lagging 1 um per
   // m/min more than X, under the sample machine's geometric error (the
   // fixed baseline).
-  const explain_testing::json res = explain_testing::run_explain(
-      "samples/recordings/ballbar.csv", explain_testing::kM3, "samples/errors/hsu-3axis.csv");
+  const json res =
+      run_explain("samples/recordings/ballbar.csv", kM3, "samples/errors/hsu-3axis.csv");
   const auto& f = res.at("findings");
   ASSERT_EQ(f.size(), 2u) << f.dump(1);
   EXPECT_EQ(f.at(0).at("effect"), "reversal");
@@ -204,6 +198,32 @@ TEST(ExplainCircular, BallbarSampleUnderTheMachinesGeometry) {
     EXPECT_GT(t.at("h_um").get<double>(), 3.0);  // the backlash opens the two directions
     EXPECT_LT(t.at("h_after_um").get<double>(), 2 * 5 * 0.3 * std::sqrt(2.0));
   }
+}
+
+TEST(ExplainCircular, ReversalSpikeAndLateralPlayAreTheirOwnForms) {
+  // A spike: X stays 5 um behind after each reversal and catches up over
+  // 3 mm; lateral play: X shifts 2 um with the direction of Y. Radially:
+  // -s_X 5 exp(-d_X / 3) cos(phi) at the 0 and 180 degree points, and
+  // s_Y cos(phi) at the 90 and 270 degree points, with opposite signs in
+  // the two directions.
+  const json fx = json::parse(R"([
+      {"effect": "reversal", "axis": "X", "kind": "spike", "value_um": 5, "length_mm": 3},
+      {"effect": "reversal", "axis": "X", "kind": "lateral", "input_axis": "Y", "value_um": 2}])");
+  const ExplainResult r = ballbar(ErrorSet{}, fx.dump());
+  ASSERT_EQ(r.findings.size(), 2u) << explain_text(r);
+  std::map<std::string, const Finding*> by_kind;
+  for (const Finding& f : r.findings) {
+    EXPECT_EQ(f.effect, "reversal");
+    EXPECT_EQ(f.axis, AxisName::X);
+    by_kind[f.parameters.at(0).second.get<std::string>()] = &f;
+  }
+  ASSERT_TRUE(by_kind.count("spike") && by_kind.count("lateral")) << explain_text(r);
+  const Finding& spike = *by_kind["spike"];
+  EXPECT_NEAR(parameter(spike, "value_um"), 5.0, 3 * std_error(spike, "value_um"));
+  EXPECT_NEAR(parameter(spike, "length_mm"), 3.0, 3 * std_error(spike, "length_mm"));
+  const Finding& lateral = *by_kind["lateral"];
+  EXPECT_NEAR(parameter(lateral, "value_um"), 2.0, 3 * std_error(lateral, "value_um"));
+  for (const CircularTest& t : r.circular_tests) EXPECT_LT(*t.h_after_um, kBand * std::sqrt(2.0));
 }
 
 }  // namespace

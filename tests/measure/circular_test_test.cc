@@ -112,5 +112,38 @@ TEST(CircularTest, SquarenessAndBacklashHaveTheirHandDerivedSignatures) {
   EXPECT_GT(used, 300);
 }
 
+TEST(CircularTest, ReversalSpikeAndLateralPlayFollowTheTurnarounds) {
+  // A bidirectional X laser run 0..100 mm, two cycles, ex and ey recorded:
+  // a spike of 4 um decaying over 20 mm after each reversal of X
+  // (-s_X 4 exp(-d / 20), d from the turnaround), and Y shifting 2 um with
+  // the direction of X (lateral play: s_X 2 / 2).
+  const Machine m = test::sample_machine("hsu-3axis");
+  const Plan plan = test::plan_from_text(
+      R"({"format": "volmap-plan/1", "tests": [{"type": "laser", "axis": "X", "from": 0,
+          "to": 100, "step": 10, "cycles": 2, "at": {"Y": 200, "Z": 150},
+          "record": ["ex", "ey"]}]})",
+      m);
+  const GainEvaluator gains(m, Formulation::kIndependent);
+  std::istringstream fx(R"({"format": "volmap-effects/1", "effects": [
+      {"effect": "reversal", "axis": "X", "kind": "spike", "value_um": 4, "length_mm": 20},
+      {"effect": "reversal", "axis": "Y", "kind": "lateral", "input_axis": "X", "value_um": 2}]})");
+  const EffectSet effects = read_effects_json(fx, "fx.json", m, gains);
+  const Recordings rec = simulate(ErrorModel(m, ErrorSet{}), plan, &effects);
+  ASSERT_EQ(rec.size(), 44u);  // 11 targets, two passes, two cycles
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    const double x = rec.position[0][i];
+    const int s = plan.points[i].dir[0];
+    const bool backward = (i % 22) >= 11;
+    // the turnaround: 100 mm before the backward pass, 0 mm before the
+    // second cycle's forward pass; none before the first forward pass
+    const double d = backward ? 100 - x : (i >= 22 ? x : INFINITY);
+    EXPECT_NEAR(rec.e_um[0][i], -s * 4 * std::exp(-d / 20), 1e-6) << i;
+    EXPECT_NEAR(rec.e_um[1][i], s * 1.0, 1e-6) << i;
+  }
+  std::istringstream bad(R"({"format": "volmap-effects/1", "effects": [
+      {"effect": "reversal", "axis": "X", "kind": "spike", "value_um": 4}]})");
+  EXPECT_THROW(read_effects_json(bad, "fx.json", m, gains), std::exception);  // no length
+}
+
 }  // namespace
 }  // namespace volmap
