@@ -16,6 +16,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -54,7 +55,7 @@ struct Effect {
   std::optional<double> theta;
   std::string parameter;       ///< the finding's parameter that estimates AMP
   std::string truth_location;  ///< a location error carried by the truth instead (squareness)
-  double period_spacings = 0;  ///< cyclic: the period in target spacings of the design
+  double period_spacings = 0;  ///< cyclic period, spike length: in target spacings of the design
 };
 
 struct Cell {
@@ -132,6 +133,11 @@ inline std::vector<Design> designs() {
           "a_deg": {"from": -90, "to": 0, "step": 30}, "c_deg": {"from": 0, "to": 345, "step": 15},
           "cycles": 2, "record": ["ex", "ey", "ez"], "dwell_s": 2, "move_s": 3}])",
        0},
+      {"XY circle (ballbar), r 100 mm, 2000 mm/min, both directions, 2 cycles, fixed baseline",
+       "machines/hsu-3axis.json",
+       R"("tests": [{"type": "circular", "plane": "XY", "center": {"X": 250, "Y": 200, "Z": 150},
+          "radius_mm": 100, "feed_mm_min": 2000, "cycles": 2}])",
+       100 * std::numbers::pi / 180, true},
   };
 }
 
@@ -145,7 +151,7 @@ inline std::vector<EffectOnDesigns> effects() {
   return {
       {{"reversal X", R"({"effect": "reversal", "axis": "X", "value_um": AMP})", "reversal/X/",
         std::nullopt, "value_um", ""},
-       {0, 1, 3, 4}},
+       {0, 1, 3, 4, 9}},
       {{"thermal drift X, settling 300 s",
         R"({"effect": "thermal_drift", "axis": "X", "kind": "offset", "amplitude_um": AMP, "tau_s": 300})",
         "thermal_drift/X/offset/settling", 300.0, "amplitude_um", ""},
@@ -179,6 +185,14 @@ inline std::vector<EffectOnDesigns> effects() {
         R"({"effect": "rotary_wobble", "axis": "C", "order": 2, "amplitude_urad": AMP, "phase_deg": 30})",
         "rotary_wobble/C/", 2.0, "amplitude_urad", ""},
        {8}},
+      {{"reversal spike X, 1.5 target spacings",
+        R"({"effect": "reversal", "axis": "X", "kind": "spike", "value_um": AMP, "length_mm": PERIOD})",
+        "reversal/X/spike", std::nullopt, "value_um", "", 1.5},
+       {3, 9}},
+      {{"lateral play, Y with the direction of X",
+        R"({"effect": "reversal", "axis": "Y", "kind": "lateral", "input_axis": "X", "value_um": AMP})",
+        "reversal/Y/lateral/X", std::nullopt, "value_um", ""},
+       {1, 9}},
       {{"rotary positioning C, order 3",
         R"({"effect": "rotary_positioning", "axis": "C", "order": 3, "amplitude_urad": AMP, "phase_deg": -20})",
         "rotary_positioning/C/", 3.0, "amplitude_urad", ""},
@@ -187,7 +201,8 @@ inline std::vector<EffectOnDesigns> effects() {
 }
 
 /// The nonlinear parameter of an effect on a design (the cyclic period in
-/// target spacings: 4.7, never a multiple of the spacing).
+/// target spacings: 4.7, never a multiple of the spacing; a spike's decay
+/// length: 1.5 spacings).
 inline std::optional<double> theta_of(const Effect& e, const Design& d) {
   if (e.period_spacings > 0) return e.period_spacings * d.step_mm;
   return e.theta;
@@ -243,9 +258,11 @@ class Runner {
     Outcome o;
     const std::string effect_name = e ? e->key.substr(0, e->key.find('/')) : "";
     const std::string axis = e ? e->key.substr(e->key.find('/') + 1, 1) : "";
+    const std::string variant = e ? e->key.substr(e->key.find('/', e->key.find('/') + 1) + 1) : "";
     for (const Finding& f : r.findings) {
-      const bool same =
-          e && f.effect == effect_name && f.axis && explanation::axis_letter(*f.axis) == axis;
+      const bool same = e && f.effect == effect_name && f.axis &&
+                        explanation::axis_letter(*f.axis) == axis &&
+                        (effect_name != "reversal" || reversal_form(f) == variant);
       if (!same) {
         ++o.other_findings;
         continue;
@@ -260,6 +277,17 @@ class Runner {
       for (const CandidateResult& c : r.candidates)
         if (key_of(c) == e->key) o.detectable = c.detectable;
     return o;
+  }
+
+  /// A reversal finding's form as its candidate's variant: "" (a step),
+  /// "spike", "lateral/J".
+  static std::string reversal_form(const Finding& f) {
+    std::string kind, input;
+    for (const auto& [k, v] : f.parameters) {
+      if (k == "kind") kind = v.get<std::string>();
+      if (k == "input_axis") input = v.get<std::string>();
+    }
+    return kind == "lateral" ? "lateral/" + input : kind;
   }
 
   static bool within_3se(const Finding& f, const Effect& e, double amplitude) {

@@ -58,15 +58,15 @@ std::vector<CandidateResult> candidate_results(const CandidateContext& ctx, cons
     r.effect = c.effect;
     r.axis = c.axis;
     r.variant = c.variant;
-    r.chi2 = t.chi2;
-    r.p_value = t.p_value;
-    r.critical_chi2 = critical_chi2(t.design);
     r.detectable_unit = c.amplitude_unit;
-    if (!t.estimable) {
+    if (!t.estimable) {  // never tested: no statistic, nothing detectable
       r.status = "not estimable";
       out.push_back(std::move(r));
       continue;
     }
+    r.chi2 = t.chi2;
+    r.p_value = t.p_value;
+    r.critical_chi2 = critical_chi2(t.design);
     const auto asked = ctx.options.detectable_at.find(c.key());
     const double theta = asked != ctx.options.detectable_at.end() ? asked->second : t.theta;
     r.at = quoted_at(c, theta);

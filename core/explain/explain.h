@@ -119,7 +119,9 @@ struct CandidateResult {
   std::optional<AxisName> axis;
   std::string variant;
   std::string status;  ///< "finding", "confounded", "not significant", "did not hold up"
-  double chi2 = 0, critical_chi2 = 0, p_value = 1;
+  /// The likelihood-ratio statistic, its critical value and corrected
+  /// p-value; none for a candidate that was not estimable.
+  std::optional<double> chi2, critical_chi2, p_value;
   std::string detectable_unit;                       ///< the key is detectable_<unit>
   std::optional<double> detectable;                  ///< in that unit
   std::optional<std::pair<std::string, double>> at;  ///< the nonlinear parameter it was quoted at

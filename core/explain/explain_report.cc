@@ -100,9 +100,12 @@ nlohmann::ordered_json candidates_json(const std::vector<CandidateResult>& candi
     o["status"] = c.status;
     o["detectable_" + c.detectable_unit] = json_number(c.detectable);
     if (c.at) o["at"] = {{c.at->first, json_number(c.at->second)}};
-    o["chi2"] = json_number(round_significant(c.chi2, 5));
-    o["critical_chi2"] = json_number(round_significant(c.critical_chi2, 5));
-    o["p_value"] = json_number(round_significant(c.p_value, 3));
+    auto rounded = [](const std::optional<double>& v, int digits) {
+      return v ? json_number(round_significant(*v, digits)) : nlohmann::json(nullptr);
+    };
+    o["chi2"] = rounded(c.chi2, 5);
+    o["critical_chi2"] = rounded(c.critical_chi2, 5);
+    o["p_value"] = rounded(c.p_value, 3);
     out.push_back(o);
   }
   return out;
@@ -124,11 +127,15 @@ std::string candidates_html(const std::vector<CandidateResult>& candidates) {
             ? fmt::format("{:.3g} {}", *c.detectable, explanation::unit_text(c.detectable_unit))
             : std::string("not revealed by this design");
     const std::string at = c.at ? fmt::format("{} {:.4g}", c.at->first, c.at->second) : "";
+    auto shown = [](const std::optional<double>& v, const char* f) {
+      return v ? fmt::format(fmt::runtime(f), *v) : std::string("–");
+    };
     s << fmt::format(
-        "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.1f}</td>"
-        "<td>{:.1f}</td><td>{:.2g}</td></tr>\n",
+        "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
+        "<td>{}</td><td>{}</td></tr>\n",
         c.effect, c.axis ? std::string(1, axis_char(*c.axis)) : "-", html_escape(c.variant),
-        c.status, html_escape(detectable), html_escape(at), c.chi2, c.critical_chi2, c.p_value);
+        c.status, html_escape(detectable), html_escape(at), shown(c.chi2, "{:.1f}"),
+        shown(c.critical_chi2, "{:.1f}"), shown(c.p_value, "{:.2g}"));
   }
   s << "</table>\n";
   return s.str();

@@ -1,7 +1,7 @@
 // The reduced form of the detection-power benchmark (bench/explain_power.h,
 // issue #20) that CI runs: every effect on every design that can reveal it,
 // at 1.5 times its detectable amplitude, one noise level, 5 recordings
-// each; about 200 null recordings over the nine designs. The goals are the
+// each; 230 null recordings over the ten designs. The goals are the
 // full benchmark's (docs/explain.md, "Detection power"): detection of
 // every effect in >= 95 % of its recordings, <= 1 % of null recordings
 // with any finding, parameters within 3 standard errors in >= 95 % of the
