@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,7 +17,7 @@ namespace volmap::explanation {
 namespace {
 
 constexpr int kSparseTargets = 12;     ///< up to this many targets: a value per target
-constexpr int kMaxAdaptiveDegree = 8;  ///< the automatic degree of a densely sampled axis
+constexpr int kMaxAdaptiveDegree = 6;  ///< the automatic degree of a densely sampled axis
 
 /// Polynomial degree of the component errors of each linear axis; adaptive:
 /// automatic and densely sampled (the degree is raised while the data
@@ -80,11 +81,24 @@ void add_component_constants(const Observations& obs, std::vector<Eigen::VectorX
   }
 }
 
+/// A component error's gain g times s^p, s the position of axis a scaled
+/// over its travel.
+Eigen::VectorXd power_column(const Observations& obs, AxisName a, const Eigen::VectorXd& g, int p) {
+  const TravelScale travel = travel_scale(obs.machine, a);
+  Eigen::VectorXd c(g.size());
+  for (Eigen::Index e = 0; e < g.size(); ++e) {
+    const double s =
+        (obs.position(a, obs.recording_row[static_cast<std::size_t>(e)]) - travel.centre_mm) /
+        travel.half_mm;
+    c[e] = g[e] * std::pow(s, p);
+  }
+  return c;
+}
+
 /// The fitted rigid body: every location error, and every component error
 /// of a linear axis as s^1..s^degree. Counts what it adds.
 void add_rigid_body_errors(const Observations& obs, const PolynomialDegrees& degrees,
                            std::vector<Eigen::VectorXd>& cols, int& location, int& components) {
-  const Eigen::Index n = static_cast<Eigen::Index>(obs.count);
   for (std::size_t k = 0; k < obs.error_names.size(); ++k) {
     const ErrorName en = *parse_error_name(obs.error_names[k]);
     const Eigen::VectorXd g = obs.error_gain.col(static_cast<Eigen::Index>(k));
@@ -94,20 +108,25 @@ void add_rigid_body_errors(const Observations& obs, const PolynomialDegrees& deg
       continue;
     }
     if (is_rotary(en.axis)) continue;
-    const TravelScale travel = travel_scale(obs.machine, en.axis);
-    const double centre = travel.centre_mm, half = travel.half_mm;
     const int degree = degrees.of_axis[static_cast<std::size_t>(en.axis)];
-    for (int p = 1; p <= degree; ++p) {
-      Eigen::VectorXd c(n);
-      for (Eigen::Index e = 0; e < n; ++e) {
-        const double s =
-            (obs.position(en.axis, obs.recording_row[static_cast<std::size_t>(e)]) - centre) / half;
-        c[e] = g[e] * std::pow(s, p);
-      }
-      cols.push_back(c);
-    }
+    for (int p = 1; p <= degree; ++p) cols.push_back(power_column(obs, en.axis, g, p));
     ++components;
   }
+}
+
+/// The columns of every component error of linear axis a at power p, as a
+/// block (weighted, normalised).
+ColumnBlock power_block(const Observations& obs, AxisName a, int p) {
+  std::vector<Eigen::VectorXd> cols;
+  for (std::size_t k = 0; k < obs.error_names.size(); ++k) {
+    const ErrorName en = *parse_error_name(obs.error_names[k]);
+    if (en.location || en.axis != a) continue;
+    cols.push_back(power_column(obs, a, obs.error_gain.col(static_cast<Eigen::Index>(k)), p));
+  }
+  Eigen::MatrixXd phys(static_cast<Eigen::Index>(obs.count),
+                       static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t j = 0; j < cols.size(); ++j) phys.col(static_cast<Eigen::Index>(j)) = cols[j];
+  return make_column_block(obs, phys);
 }
 
 /// The model of the columns not spanned by earlier ones.
@@ -158,32 +177,39 @@ void raise_degrees(const Observations& obs, const ExplainOptions& opt, Polynomia
                    BaselineBuild& b) {
   const double family =
       static_cast<double>(std::count(degrees.adaptive.begin(), degrees.adaptive.end(), true));
+  const double n = static_cast<double>(obs.count);
+  bool raised = false;
   while (true) {
+    // Each axis's next power tried as a block beside the model (its profile
+    // gain and projected rank), then the winner built in (one full build).
     std::optional<std::pair<double, AxisName>> best;
-    BaselineBuild best_build;
     for (AxisName a : obs.machine.axis_order) {
       const std::size_t ai = static_cast<std::size_t>(a);
       if (!degrees.adaptive[ai] || degrees.of_axis[ai] >= kMaxAdaptiveDegree) continue;
-      PolynomialDegrees raised = degrees;
-      ++raised.of_axis[ai];
-      BaselineBuild t = build_baseline(obs, opt, raised);
-      const Eigen::Index added = t.model.k() - b.model.k();
+      const ColumnBlock next = power_block(obs, a, degrees.of_axis[ai] + 1);
+      if (next.cols.cols() == 0) continue;
+      const Eigen::VectorXd ev =
+          Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(projected_gram(b.model, next))
+              .eigenvalues();
+      const double added = static_cast<double>((ev.array() > 1e-6 * n).count());
       if (added <= 0) continue;
       TestDesign d;
-      d.columns = static_cast<double>(added);
-      d.residual_dof = std::max(1.0, static_cast<double>(obs.count - t.model.k()));
+      d.columns = added;
+      d.residual_dof = std::max(1.0, n - static_cast<double>(b.model.k()) - added);
       d.family = family;
-      const double sigma2 = std::max(t.model.rss, 1e-300) / d.residual_dof;
-      const double p = corrected_p_value(std::max(0.0, b.model.rss - t.model.rss) / sigma2, d);
-      if (p < kFamilyAlpha && (!best || p < best->first)) {
-        best = {p, a};
-        best_build = std::move(t);
-      }
+      const double rss = profile(obs, b.model, next).rss;
+      const double sigma2 = std::max(rss, 1e-300) / d.residual_dof;
+      const double p = corrected_p_value(std::max(0.0, b.model.rss - rss) / sigma2, d);
+      if (p < kFamilyAlpha && (!best || p < best->first)) best = {p, a};
     }
-    if (!best) return;
-    ++degrees.of_axis[static_cast<std::size_t>(best->second)];
-    b = std::move(best_build);
+    if (!best) break;
+    // beside the model for the next round (a full build once at the end)
+    const std::size_t ai = static_cast<std::size_t>(best->second);
+    b.model = with_block(b.model, power_block(obs, best->second, ++degrees.of_axis[ai]), 0);
+    fit(obs, b.model);
+    raised = true;
   }
+  if (raised) b = build_baseline(obs, opt, degrees);
 }
 
 }  // namespace

@@ -47,6 +47,10 @@ struct Candidate {  // an aggregate: build one with designated initializers
   };
   Amplitude amplitude = Amplitude::kFirst;
   std::string amplitude_unit = "um";
+  /// The look-elsewhere path length of the scan in closed form (detection.h),
+  /// where the numerical walk would cost a column build per small step
+  /// (a period scan over 100 000 readings); empty: walked numerically.
+  std::function<double()> path_length{};
   std::string key() const {
     return effect + "/" + (axis ? axis_letter(*axis) : "-") + "/" + variant;
   }

@@ -35,6 +35,23 @@ void add_cyclic_candidate(const CandidateContext& c, AxisName k, const Eigen::Ve
   const double f_lo = 1.0 / p_max, f_hi = 1.0 / p_min;
   const double df = std::max(1.0 / (4.0 * span), (f_hi - f_lo) / 600.0);
   for (double f = f_lo; f <= f_hi; f += df) cand.grid.push_back(1.0 / f);
+  // Look-elsewhere path (detection.h) in closed form: d/df of (sin, cos)(2 pi f q)
+  // is 2 pi q times the other column; the part q_mean lies in the span, so the
+  // span turns at 2 pi sigma_q per unit of frequency (sigma_q the weighted
+  // spread of the positions along the columns): L = 2 pi sigma_q (f_hi - f_lo).
+  // tests/explain/detection_test.cc checks it against the walked path.
+  double w_sum = 0, q_sum = 0, q2_sum = 0;
+  for (Eigen::Index e = 0; e < n; ++e) {
+    const double w = along_k[e] * along_k[e] * obs.sqrt_weight[e] * obs.sqrt_weight[e];
+    const double q = obs.position(k, obs.recording_row[static_cast<std::size_t>(e)]);
+    w_sum += w;
+    q_sum += w * q;
+    q2_sum += w * q * q;
+  }
+  const double sigma_q =
+      w_sum > 0 ? std::sqrt(std::max(0.0, q2_sum / w_sum - (q_sum / w_sum) * (q_sum / w_sum))) : 0;
+  const double scanned = 1.0 / cand.grid.back() - 1.0 / cand.grid.front();
+  cand.path_length = [sigma_q, scanned] { return 2 * std::numbers::pi * sigma_q * scanned; };
   cand.build = [&obs, k, along_k, n](double period_mm) {
     Eigen::MatrixXd C(n, 2);
     for (Eigen::Index e = 0; e < n; ++e) {

@@ -85,10 +85,10 @@ std::vector<CandidateResult> candidate_results(const CandidateContext& ctx, cons
       fit(obs, reference);
     }
     const ColumnBlock b = make_column_block(obs, c.build(theta), c.per_run);
-    const Eigen::MatrixXd P = projected_out(reference, b.cols);
     // physical coefficient = normalised * scale: S_phys = D^-1 S D^-1
     const Eigen::VectorXd inv = b.scale.cwiseInverse();
-    const Eigen::MatrixXd S_phys = inv.asDiagonal() * (P.transpose() * P) * inv.asDiagonal();
+    const Eigen::MatrixXd S_phys =
+        inv.asDiagonal() * projected_gram(reference, b) * inv.asDiagonal();
     // a direction keeping less than 1e-6 of its column is spanned already
     const Eigen::VectorXd floor = 1e-6 * n * inv.cwiseProduct(inv);
     const double per_unit = visibility(c, S_phys, floor);

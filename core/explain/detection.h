@@ -73,8 +73,9 @@ double detectable_noncentrality(const TestDesign& d);
 /// projected out, as a nonlinear parameter walks a scan. basis_at(i) gives
 /// an orthonormal basis (n x s) of the projected columns at scan point i;
 /// the path is the sum over neighbours of the RMS principal angle (rad).
-/// A step above 0.3 rad is undersampled and walked in eighths: midway(i, f)
-/// gives the basis at fraction f of the way from point i to point i + 1.
+/// A step above 0.3 rad is undersampled and bisected, up to three times:
+/// midway(i, f) gives the basis at fraction f of the way from point i to
+/// point i + 1.
 template <typename BasisAt, typename Midway>
 double path_length(int points, BasisAt basis_at, Midway midway);
 
@@ -86,6 +87,19 @@ double rms_principal_angle(const Eigen::MatrixXd& Qa, const Eigen::MatrixXd& Qb)
 /// spanned already), through A.
 Eigen::MatrixXd orthonormal_basis(const Eigen::MatrixXd& A, double floor);
 
+/// The path between two bases at fractions f0 and f1 of step i, bisected
+/// while a piece turns by more than 0.3 rad (depth levels left).
+template <typename Midway>
+double walked_step(int i, double f0, double f1, const Eigen::MatrixXd& a, const Eigen::MatrixXd& b,
+                   Midway& midway, int depth) {
+  const double direct = rms_principal_angle(a, b);
+  if (direct <= 0.3 || depth == 0) return direct;
+  const double fm = 0.5 * (f0 + f1);
+  const Eigen::MatrixXd m = midway(i, fm);
+  return walked_step(i, f0, fm, a, m, midway, depth - 1) +
+         walked_step(i, fm, f1, m, b, midway, depth - 1);
+}
+
 template <typename BasisAt, typename Midway>
 double path_length(int points, BasisAt basis_at, Midway midway) {
   double length = 0;
@@ -93,18 +107,7 @@ double path_length(int points, BasisAt basis_at, Midway midway) {
   Eigen::MatrixXd prev = basis_at(0);
   for (int i = 0; i + 1 < points; ++i) {
     Eigen::MatrixXd next = basis_at(i + 1);
-    double step = rms_principal_angle(prev, next);
-    if (step > 0.3) {
-      // Undersampled: walk the step in eighths.
-      step = 0;
-      Eigen::MatrixXd a = prev;
-      for (int j = 1; j <= 8; ++j) {
-        Eigen::MatrixXd b = j == 8 ? next : midway(i, j / 8.0);
-        step += rms_principal_angle(a, b);
-        a = std::move(b);
-      }
-    }
-    length += step;
+    length += walked_step(i, 0.0, 1.0, prev, next, midway, 3);
     prev = std::move(next);
   }
   return length;

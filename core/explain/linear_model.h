@@ -61,6 +61,10 @@ struct ProfileGain {
 ProfileGain profile(const Observations& obs, const LinearModel& model, const ColumnBlock& b,
                     bool want_fitted = false);
 
+/// The Gram matrix of a block's columns with the fitted model projected
+/// out: C^T C - (X^T C)^T G^-1 (X^T C) (kc x kc).
+Eigen::MatrixXd projected_gram(const LinearModel& model, const ColumnBlock& b);
+
 /// The columns C (weighted, normalised like the model's) with the fitted
 /// model's columns projected out: C - X G^-1 X^T C.
 Eigen::MatrixXd projected_out(const LinearModel& model, const Eigen::MatrixXd& C);

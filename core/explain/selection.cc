@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -137,10 +138,21 @@ class Selector {
       return orthonormal_basis(projected_out(sel_.model, b.cols),
                                1e-6 * static_cast<double>(obs_.count));
     };
-    d.columns = static_cast<double>(std::max<Eigen::Index>(1, basis(theta).cols()));
+    {  // the rank of the projected columns, from their Gram matrix
+      const Eigen::MatrixXd S =
+          projected_gram(sel_.model, make_column_block(obs_, c.build(theta), c.per_run));
+      const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S).eigenvalues();
+      const Eigen::Index rank =
+          (ev.array() > 1e-6 * static_cast<double>(obs_.count)).cast<Eigen::Index>().sum();
+      d.columns = static_cast<double>(std::max<Eigen::Index>(1, rank));
+    }
     if (c.grid.empty()) return d;
     if (!c.refine) {
       d.discrete = static_cast<double>(c.grid.size());
+      return d;
+    }
+    if (c.path_length) {
+      d.path_length = c.path_length();
       return d;
     }
     auto between = [&](std::size_t i, double frac) {

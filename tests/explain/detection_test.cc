@@ -93,6 +93,16 @@ TEST(Detection, LookElsewhereBoundHoldsForAScannedPeriod) {
         return sine_basis(q, 1 / ((1 - f) * a + f * b));
       });
   EXPECT_GT(L, 10.0);
+  // The closed form explain uses for a period scan (candidates_cyclic.cc):
+  // 2 pi sigma_q (f_hi - f_lo), sigma_q the spread of the positions.
+  double mean = 0, mean2 = 0;
+  for (double x : q) {
+    mean += x / static_cast<double>(q.size());
+    mean2 += x * x / static_cast<double>(q.size());
+  }
+  const double closed = 2 * std::numbers::pi * std::sqrt(mean2 - mean * mean) *
+                        (1 / periods.back() - 1 / periods.front());
+  EXPECT_NEAR(closed / L, 1.0, 0.1) << "walked " << L << " rad, closed form " << closed;
   TestDesign d;
   d.columns = 2;
   d.residual_dof = 1e9;  // sigma known
