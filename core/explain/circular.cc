@@ -83,8 +83,13 @@ std::optional<RunCircle> run_circle(const Observations& obs, int r,
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < eqs.size(); ++i) {
+    // the tool tip against the workpiece (nominal), the frame of the beams:
+    // an axis that moves the table moves the tip the other way
     const int row = obs.recording_row[static_cast<std::size_t>(eqs[i])];
-    for (int k = 0; k < 3; ++k) p[i][k] = obs.position(static_cast<AxisName>(k), row);
+    AxisVector u(obs.machine.axis_count());
+    for (int a = 0; a < obs.machine.axis_count(); ++a)
+      u[a] = obs.position(obs.machine.axis_order[static_cast<std::size_t>(a)], row);
+    p[i] = nominal_forward(obs.machine, u).tip_mm;
     const Eigen::Vector3d b = obs.direction_wp.col(eqs[i]);
     const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - b * b.transpose();
     M += across;

@@ -131,11 +131,22 @@ double chi2_upcrossing_rate(double u, double s) {
                   0.5 * std::log(2 * std::numbers::pi) - std::lgamma(0.5 * s));
 }
 
+double f_field_upcrossing_rate(double u, double s, double nu) {
+  if (u <= 0) return 0;
+  return std::exp(std::lgamma(0.5 * (nu + s - 1)) - std::lgamma(0.5 * nu) - std::lgamma(0.5 * s) -
+                  0.5 * std::log(std::numbers::pi) + 0.5 * (s - 1) * std::log(u / nu) -
+                  0.5 * (nu + s - 2) * std::log1p(u / nu));
+}
+
 double corrected_p_value(double chi2, const TestDesign& d) {
   const double s = std::max(1.0, d.columns);
   double p =
       d.residual_dof > 0 ? f_upper_tail(chi2 / s, s, d.residual_dof) : chi2_upper_tail(chi2, s);
-  p = p * std::max(1.0, d.discrete) + d.path_length * chi2_upcrossing_rate(chi2, s);
+  // sigma estimated from the residual: the F-field's rate (heavier tails)
+  const double rate = d.residual_dof > 0 && d.residual_dof < 1e8
+                          ? f_field_upcrossing_rate(chi2, s, d.residual_dof)
+                          : chi2_upcrossing_rate(chi2, s);
+  p = p * std::max(1.0, d.discrete) + d.path_length * rate;
   return std::min(1.0, p * std::max(1.0, d.family));
 }
 

@@ -50,6 +50,12 @@ double noncentral_chi2_upper_tail(double u, double s, double lambda);
 /// process (Rice): u^((s-1)/2) e^(-u/2) 2^(1-s/2) / (sqrt(2 pi) Gamma(s/2)).
 double chi2_upcrossing_rate(double u, double s);
 
+/// The same for the F-field of a statistic u = s F whose sigma is estimated
+/// with nu degrees of freedom (Worsley 1994): heavier-tailed than the
+/// chi2_s process, to which it tends as nu grows:
+/// G((nu+s-1)/2) / (G(nu/2) G(s/2) sqrt(pi)) (u/nu)^((s-1)/2) (1+u/nu)^(-(nu+s-2)/2).
+double f_field_upcrossing_rate(double u, double s, double nu);
+
 /// How one candidate is tested: its columns s, the residual degrees of
 /// freedom, and its look-elsewhere (path length or discrete count).
 struct TestDesign {

@@ -90,27 +90,38 @@ ExplainPlot partial_residual_plot(const Observations& obs, const LinearModel& mo
 // the servo mismatch, which ballbar software quotes in milliseconds: a lag of
 // c um per m/min is a time constant of c / (1000 um/mm * 1000 mm/min / 60 s)
 // = 0.06 c ms.
-void relative_finding(AxisName other, Finding& f) {
-  f.parameters.push_back({"relative_to_axis", axis_letter(other)});
+void relative_finding(AxisName other, bool sum, Finding& f) {
+  f.parameters.push_back({sum ? "plus_axis" : "relative_to_axis", axis_letter(other)});
   const std::string k = f.axis ? axis_letter(*f.axis) : std::string("-");
   f.explanation += fmt::format(
-      " This recording shows only the difference between {0} and {1} (the same signature on "
-      "both axes): the value is {0}'s less {1}'s.",
-      k, axis_letter(other));
-  if (f.effect != "servo_lag") return;
-  const double c = f.parameters.front().second.get<double>();
+      " This recording shows only the {2} of {0} and {1} ({3} signatures on both axes): the "
+      "value is {0}'s {4} {1}'s.",
+      k, axis_letter(other), sum ? "sum" : "difference", sum ? "equal" : "opposite",
+      sum ? "plus" : "less");
+  if (f.effect != "servo_lag" || sum) return;
+  double c = f.parameters.front().second.get<double>();
   double se = 0;
   for (const auto& [name, v] : f.std_errors)
     if (name == "um_per_m_min") se = v;
+  // Named on the axis that lags, with a positive lag relative to the other.
+  std::string late = k, early = axis_letter(other);
+  if (c < 0 && f.axis) {
+    std::swap(late, early);
+    const AxisName lagging = other;
+    f.parameters.front().second = json_number(-c);
+    for (auto& [name, v] : f.parameters)
+      if (name == "relative_to_axis") v = axis_letter(*f.axis);
+    f.axis = lagging;
+    c = -c;
+  }
   f.parameters.push_back({"mismatch_ms", json_number(0.06 * c)});
   f.std_errors.push_back({"mismatch_ms", 0.06 * se});
-  const std::string late = c >= 0 ? k : axis_letter(other), early = c >= 0 ? axis_letter(other) : k;
   f.explanation = fmt::format(
-      "{0} lags {1:.3g} µm per m/min of feed more than {2} (the lag of {3} less that of {4} is "
-      "{5:.3g}): servo mismatch, {0} responds {6:.3g} ms later than {2}. On a circular test "
-      "(ISO 230-4) an ellipse along the diagonals that turns with the direction of travel; the "
-      "circle shows the difference of the two axes' lags, not each.",
-      late, std::abs(c), early, k, axis_letter(other), c, std::abs(0.06 * c));
+      "{0} lags {1:.3g} µm per m/min of feed more than {2}: servo mismatch, {0} responds {3:.3g} "
+      "ms later than {2}. On a circular test (ISO 230-4) an ellipse along the diagonals that turns "
+      "with the direction of travel; the circle shows the difference of the two axes' lags, not "
+      "each.",
+      late, c, early, 0.06 * c);
 }
 
 Finding finding_of(const Observations& obs, const LinearModel& model, const Eigen::MatrixXd& Ginv,
@@ -128,7 +139,7 @@ Finding finding_of(const Observations& obs, const LinearModel& model, const Eige
   f.heldout_rms_after_um = s.heldout_after_um;
   f.delta_bic = s.delta_bic;
   f.plot = partial_residual_plot(obs, model, s);
-  if (s.relative_to) relative_finding(*s.relative_to, f);
+  if (s.relative_to) relative_finding(*s.relative_to, s.relative_is_sum, f);
   return f;
 }
 

@@ -192,7 +192,7 @@ class Selector {
       s.heldout_before_um = sel_.heldout_rms_um;
       s.heldout_after_um = ho;
       s.first_col = model.k();
-      s.confounded = find_confounded(f, fits, s.relative_to);
+      s.confounded = find_confounded(f, fits, s.relative_to, s.relative_is_sum);
       used_.insert(used_key(*f.cand));
       tests_[f.cand].taken = true;
       s.fitted = std::move(f);
@@ -207,7 +207,7 @@ class Selector {
   /// Confounding: another candidate explains the same structure almost as
   /// well. Reports the pair and takes the other out of the search.
   bool find_confounded(FittedCandidate& f, const std::vector<FittedCandidate>& fits,
-                       std::optional<AxisName>& relative_to) {
+                       std::optional<AxisName>& relative_to, bool& relative_is_sum) {
     const LinearModel& model = sel_.model;
     const double gain_best = model.rss - f.gain.rss;
     for (const FittedCandidate& g : fits) {
@@ -238,9 +238,16 @@ class Selector {
       // One effect on two axes with one signature (the lags of X and Y on
       // a circle): not two physics but a difference the design shows, the
       // split between the axes it cannot. A finding relative to the other.
-      if (g.cand->effect == f.cand->effect && g.block.cols.cols() == f.block.cols.cols() &&
-          std::abs(rho) > 0.999) {
+      // Columns of one size, equal or opposite: the data show the sum or the
+      // difference of the two coefficients. Of different sizes (a diagonal
+      // beam) only a weighted sum: confounded.
+      const double along = std::abs(rho) > 0.999 && g.cand->effect == f.cand->effect &&
+                                   g.block.cols.cols() == f.block.cols.cols()
+                               ? same_size_correlation(f.block, g.block)
+                               : 0.0;
+      if (std::abs(along) > 0.999) {
         relative_to = g.cand->axis;
+        relative_is_sum = along > 0;
         used_.insert(used_key(*g.cand));
         continue;
       }
@@ -249,6 +256,17 @@ class Selector {
       return true;
     }
     return false;
+  }
+
+  /// Correlation of two blocks' first columns with the model projected out,
+  /// when their physical sizes agree within 1 % (then the data show the sum
+  /// or the difference of the coefficients); 0 otherwise.
+  double same_size_correlation(const ColumnBlock& a, const ColumnBlock& b) const {
+    const Eigen::VectorXd pa = projected_out(sel_.model, a.cols.leftCols(1)).col(0);
+    const Eigen::VectorXd pb = projected_out(sel_.model, b.cols.leftCols(1)).col(0);
+    const double size_a = pa.norm() / a.scale[0], size_b = pb.norm() / b.scale[0];
+    if (!(size_b > 0) || std::abs(size_a / size_b - 1) > 0.01) return 0.0;
+    return correlation(pa, pb);
   }
 
   /// Whether the columns of the smaller block lie in the span of the larger

@@ -29,6 +29,7 @@ struct SelectedEffect {
   /// The same effect on this axis gives the same structure: the finding is
   /// the difference of the two (servo mismatch on a circle).
   std::optional<AxisName> relative_to;
+  bool relative_is_sum = false;  ///< the signatures are equal (a sum), not opposite
   double rms_before_um = 0, rms_after_um = 0;
   std::optional<double> heldout_before_um, heldout_after_um;
   double delta_bic = 0;

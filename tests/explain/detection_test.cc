@@ -137,6 +137,47 @@ TEST(Detection, LookElsewhereBoundHoldsForAScannedPeriod) {
   EXPECT_LT(static_cast<double>(over_u) / trials, 0.001 + 3 * std::sqrt(0.001 / trials));
 }
 
+TEST(Detection, LookElsewhereHoldsWithSigmaEstimatedFromFewReadings) {
+  // 40 readings, sigma estimated from the residual (38 degrees of freedom
+  // after the pair): the statistic is an F-field with heavier tails than
+  // the chi2 process; the corrected p-value must still be calibrated.
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> uni(0, 500);
+  std::vector<double> q(40);
+  for (double& x : q) x = uni(rng);
+  std::vector<double> periods;
+  for (double f = 1.0 / 160; f <= 1.0 / 25; f += 1.0 / 4000) periods.push_back(1.0 / f);
+  std::vector<Eigen::MatrixXd> bases;
+  for (double p : periods) bases.push_back(sine_basis(q, p));
+  TestDesign d;
+  d.columns = 2;
+  d.residual_dof = static_cast<double>(q.size()) - 2;
+  d.path_length = path_length(
+      static_cast<int>(bases.size()), [&](int i) { return bases[static_cast<std::size_t>(i)]; },
+      [&](int i, double f) {
+        const double a = 1 / periods[static_cast<std::size_t>(i)],
+                     b = 1 / periods[static_cast<std::size_t>(i) + 1];
+        return sine_basis(q, 1 / ((1 - f) * a + f * b));
+      });
+  std::normal_distribution<double> noise;
+  const int trials = 6000;
+  int below_5 = 0;
+  Eigen::VectorXd e(static_cast<Eigen::Index>(q.size()));
+  for (int t = 0; t < trials; ++t) {
+    for (Eigen::Index i = 0; i < e.size(); ++i) e[i] = noise(rng);
+    double best = 1.0;
+    for (const Eigen::MatrixXd& Q : bases) {
+      const double gain = (Q.transpose() * e).squaredNorm();
+      const double chi2 = gain / ((e.squaredNorm() - gain) / d.residual_dof);
+      best = std::min(best, corrected_p_value(chi2, d));
+    }
+    below_5 += best < 0.05;
+  }
+  const double rate = static_cast<double>(below_5) / trials;
+  std::printf("estimated sigma: P(corrected p < 0.05) = %.4f\n", rate);
+  EXPECT_LT(rate, 0.05 + 3 * std::sqrt(0.05 * 0.95 / trials));
+}
+
 TEST(Detection, DetectableAmplitudeIsFoundWithNinetyFivePercentPower) {
   // One column g (a reversal-like +-1/2) beside a constant, unit noise, a
   // family of 20 candidates: an effect of exactly the detectable amplitude
