@@ -164,31 +164,16 @@ void BlockCheck::polar_target(double at_x, double at_y, bool xy_known, Eigen::Ve
     fail(w,
          "polar coordinates from an unknown position: command X and Y first (or give "
          "`initial_position`)");
-  double px = at_x, py = at_y;
-  if (s_.absolute) {
-    if (polar_radius && !polar_angle && px == 0 && py == 0)
-      fail(w, "polar radius without an angle at the origin: add a ^ word");
-    const double radius = polar_radius ? polar_radius->value : std::hypot(py, px);
-    const double theta = polar_angle ? polar_angle->value * units::kRadPerDeg : std::atan2(py, px);
-    px = radius * std::cos(theta);
-    py = radius * std::sin(theta);
-  } else {
-    if (px == 0 && py == 0)
-      fail(w,
-           "incremental polar coordinates (G91) at the program origin are indeterminate; move "
-           "off it first");
-    if (polar_radius) {
-      const double theta = std::atan2(py, px), radius = std::hypot(py, px) + polar_radius->value;
-      px = radius * std::cos(theta);
-      py = radius * std::sin(theta);
-    }
-    if (polar_angle) {
-      const double theta = std::atan2(py, px) + polar_angle->value * units::kRadPerDeg,
-                   radius = std::hypot(py, px);
-      px = radius * std::cos(theta);
-      py = radius * std::sin(theta);
-    }
-  }
+  if (s_.absolute && polar_radius && !polar_angle && at_x == 0 && at_y == 0)
+    fail(w, "polar radius without an angle at the origin: add a ^ word");
+  if (!s_.absolute && at_x == 0 && at_y == 0)
+    fail(w,
+         "incremental polar coordinates (G91) at the program origin are indeterminate; move "
+         "off it first");
+  const double* radius = polar_radius ? &polar_radius->value : nullptr;
+  const double* angle = polar_angle ? &polar_angle->value : nullptr;
+  const Eigen::Vector2d p = polar_end({at_x, at_y}, s_.absolute, radius, angle);
+  const double px = p.x(), py = p.y();
   target.x() = px * unit + wo.x();
   target.y() = py * unit + wo.y();
   given[0] = given[1] = s_.absolute;  // an absolute polar point fixes both axes

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/common/units.h"
+
 namespace volmap::nc {
 
 ArcGeometry arc_geometry(const Motion& m) {
@@ -99,6 +101,28 @@ double xy_turn_rad(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out, in
   const double cross = t_in.x() * t_out.y() - t_in.y() * t_out.x();
   inside = side == 1 ? cross > 0 : cross < 0;
   return std::atan2(std::abs(cross), std::clamp(t_in.dot(t_out), -1.0, 1.0));
+}
+
+Eigen::Vector2d polar_end(const Eigen::Vector2d& at, bool absolute, const double* radius,
+                          const double* angle_deg) {
+  double px = at.x(), py = at.y();
+  if (absolute) {
+    const double r = radius ? *radius : std::hypot(py, px);
+    const double theta = angle_deg ? *angle_deg * units::kRadPerDeg : std::atan2(py, px);
+    return {r * std::cos(theta), r * std::sin(theta)};
+  }
+  if (radius) {
+    const double theta = std::atan2(py, px), r = std::hypot(py, px) + *radius;
+    px = r * std::cos(theta);
+    py = r * std::sin(theta);
+  }
+  if (angle_deg) {
+    const double theta = std::atan2(py, px) + *angle_deg * units::kRadPerDeg,
+                 r = std::hypot(py, px);
+    px = r * std::cos(theta);
+    py = r * std::sin(theta);
+  }
+  return {px, py};
 }
 
 }  // namespace volmap::nc

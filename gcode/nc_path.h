@@ -44,6 +44,18 @@ Eigen::Vector2d xy_tangent(const Motion& m, bool at_end);
 double xy_turn_rad(const Eigen::Vector2d& t_in, const Eigen::Vector2d& t_out, int side,
                    bool& inside);
 
+/// LinuxCNC's polar end point (interp_find.cc, find_ends), in program units
+/// from the program origin, from where the tool stands (`at`, program units)
+/// and the block's words (null: not given). G90: @ and ^ from the origin, a
+/// missing one the standing point's own. G91: @ adds to the standing point's
+/// radius, then ^ to its angle. (The reader refuses the indeterminate cases
+/// before: gcode/block_motion.cc.) Both depend on where the controller
+/// really stands under G91, or with one word under G90: the post writes a
+/// polar block as it is only where this end, from its own output, is
+/// within half an output unit.
+Eigen::Vector2d polar_end(const Eigen::Vector2d& at, bool absolute, const double* radius,
+                          const double* angle_deg);
+
 /// LinuxCNC's interpreter goes round a corner of the offset path (an arc
 /// outside, the offsets' intersection inside) only where the path turns by
 /// more than this; below it the tool jumps from one offset to the next.

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstring>
 
+#include "core/common/input_error.h"
 #include "gcode/nc_interpreter.h"
 
 namespace volmap::nc {
@@ -216,7 +217,14 @@ void ProgramReader::choose_dialect() {
   }
   interp_.set_dialect(report_.dialect.dialect);
   fanuc_ = report_.dialect.dialect == Dialect::kFanuc;
-  if (!fanuc_) return;
+  if (!fanuc_) {
+    // LinuxCNC has no tape leader: only blank lines may come before the
+    // opening '%' (rs274 reads any other line as a block and then refuses
+    // the '%': "Bad character '%' used"). The lines are read as the
+    // program; a '%' after them is refused where it stands (next()).
+    leader_left_ = report_.leader_lines = 0;
+    return;
+  }
   // A macro statement in the head (the first 64 KiB, where a macro
   // program's text usually is whole): flattened from the first block on.
   while (!head.empty() && !flatten_from_start_) {
@@ -278,6 +286,31 @@ void ProgramReader::start_flattening(std::string_view first, bool newline) {
   flat_->start(std::move(source));
 }
 
+void ProgramReader::linuxcnc_percent_line(std::string_view text, int line) const {
+  // rs274 (interp_read.cc, read_text): a '%' line is '%' alone (spaces
+  // around it); it opens the program only as the first line that is not
+  // blank, and closes it after that. Anything else is "Bad character '%'".
+  const std::string_view t = trimmed(flatten::without_cr(text));
+  if (t != "%")
+    throw InputError(file_, line,
+                     "'%' with text after it: LinuxCNC refuses it (\"Bad character '%' used\"); "
+                     "a program delimiter is '%' alone on its line");
+  if (!opened_ && content_seen_ && !interp_.state().ended)
+    throw InputError(file_, line,
+                     "'%' after the program began: LinuxCNC refuses it (\"Bad character '%' "
+                     "used\"); it opens a program only as its first line that is not blank. "
+                     "Put a '%' line first (the program then ends at this one), or remove this "
+                     "one (a Fanuc tape's leader before '%': --dialect fanuc)");
+}
+
+void ProgramReader::linuxcnc_end_of_file() const {
+  if (fanuc_ || !opened_ || closed_ || interp_.state().ended) return;
+  throw InputError(file_, number_,
+                   "the program opens with '%' and ends without a closing '%' (or M2/M30): "
+                   "LinuxCNC refuses it (\"File ended with no percent sign\"); add a '%' line "
+                   "at the end");
+}
+
 bool ProgramReader::next(ProgramLine& out) {
   if (!started_) {
     started_ = true;
@@ -292,6 +325,7 @@ bool ProgramReader::next(ProgramLine& out) {
     flatten::FlatLine f;
     if (!flat_->next(f, interp_.state().ended)) {
       report_.flat_blocks = flat_->emitted_lines();
+      if (!trailer_) linuxcnc_end_of_file();
       if (!trailer_ || trailer_next_ >= trailer_->size()) return false;
       const std::size_t k = trailer_next_++;
       out = ProgramLine{trailer_->line(k),
@@ -306,12 +340,19 @@ bool ProgramReader::next(ProgramLine& out) {
       return true;
     }
     report_.flat_blocks = flat_->emitted_lines();
+    // (A flattened program's closing '%' is in trailer_: one here is in
+    // the middle of the program.)
+    if (!fanuc_ && !f.verbatim && f.file && *f.file == file_ && is_percent_line(f.text))
+      linuxcnc_percent_line(f.text, f.line);
     out = ProgramLine{f.text, f.file, f.line, f.newline, f.verbatim, f.rewritten, true, false, {}};
     return true;
   }
   std::string_view text;
   bool newline = false;
-  if (!physical(text, newline)) return false;
+  if (!physical(text, newline)) {
+    linuxcnc_end_of_file();
+    return false;
+  }
   out.text = text;
   out.file = &file_;
   out.line = number_;
@@ -333,9 +374,13 @@ bool ProgramReader::next(ProgramLine& out) {
   // reads every block.)
   if (!fanuc_ && lex_plain_axis_words(flatten::without_cr(text), out.words)) {
     out.plain = true;
+    content_seen_ = true;
     return true;
   }
-  if (!fanuc_ && !maybe_special(text)) return true;
+  if (!fanuc_ && !maybe_special(text)) {
+    content_seen_ = content_seen_ || !trimmed(flatten::without_cr(text)).empty();
+    return true;
+  }
   if (fanuc_ && is_program_number_line(text)) {
     // O1001 / :1001: the program's number, which the control stores it
     // under; nothing to run.
@@ -343,10 +388,13 @@ bool ProgramReader::next(ProgramLine& out) {
     return true;
   }
   if (is_percent_line(text)) {
+    if (!fanuc_) linuxcnc_percent_line(text, number_);
     if (opened_) closed_ = true;
     opened_ = true;
     return true;
   }
+  if (!fanuc_ && !content_seen_ && !trimmed(flatten::without_cr(text)).empty())
+    content_seen_ = true;
   const bool flatten =
       fanuc_ ? flatten_from_start_ || fanuc_needs_flattening(text) : needs_flattening(text);
   if (flatten && !interp_.state().ended) {

@@ -1,8 +1,9 @@
 // An NC program's lines as the controller runs them, for the interpreter
 // and the post-processors: read in large pieces (a program of any size
 // streams through in constant memory), the tape's frame set aside (a UTF-8
-// byte-order mark, leader text before the first '%' and what follows the
-// closing '%': handed out verbatim, not read), and, from the first line that uses parameters,
+// byte-order mark, a Fanuc tape's leader text before the first '%', and
+// what follows the closing '%': handed out verbatim, not read; LinuxCNC's
+// '%' rules refused where rs274 refuses them), and, from the first line that uses parameters,
 // expressions or O-word control flow on, the program flattened (flatten/flattener.h).
 //
 // Every line of the file comes out once, in order, until flattening
@@ -84,6 +85,10 @@ class ProgramReader {
   /// The dialect, `auto` resolved (report_.dialect), set in the interpreter.
   void choose_dialect();
   void start_flattening(std::string_view first, bool newline);
+  /// LinuxCNC's rules for a '%' line (refused where rs274 refuses it).
+  void linuxcnc_percent_line(std::string_view text, int line) const;
+  /// LinuxCNC: a program opened by '%' that neither closes nor ends.
+  void linuxcnc_end_of_file() const;
 
   std::istream& in_;
   std::string file_;
@@ -101,6 +106,7 @@ class ProgramReader {
   bool started_ = false;
   int leader_left_ = 0;
   bool opened_ = false, closed_ = false;  ///< '%' seen: the first, the closing one
+  bool content_seen_ = false;             ///< LinuxCNC: a line that is not blank was read
   std::unique_ptr<flatten::Parameters> params_;
   std::unique_ptr<flatten::Flattener> flat_;
   std::unique_ptr<flatten::Source> trailer_;  ///< after the closing '%' of a flattened program

@@ -293,6 +293,19 @@ void FiveAxisPost::run(FiveAxisReader& reader) {
 using five_axis_detail::angle_between;
 using five_axis_detail::FiveAxisPost;
 
+namespace {
+// A program that moves nothing (empty, comments, codes without motion):
+// its output would be its input, most likely not the program meant.
+void refuse_motion_free(const std::string& in_name, const FiveAxisPostReport& r) {
+  if (r.moves > 0) return;
+  throw InputError(
+      in_name, 0,
+      (r.lines == 0 ? std::string("the file is empty") : std::to_string(r.lines) + " lines read") +
+          "; no block moves the machine, so there is nothing to post: check that "
+          "this is the program meant");
+}
+}  // namespace
+
 std::string FiveAxisPostOptions::invalid_reason() const {
   if (!(tolerance_mm > 0)) return "the position tolerance must be positive";
   if (!(angle_tolerance_rad > 0)) return "the angle tolerance must be positive";
@@ -324,6 +337,7 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
                         options.tolerance_mm / 4);
   FiveAxisPost post(in_name, out, tools, options);
   post.run(reader);
+  refuse_motion_free(in_name, post.report_);
   return post.report_;
 }
 
@@ -342,6 +356,7 @@ FiveAxisPostReport post_five_axis(std::istream& in, const std::string& in_name, 
                         options.tolerance_mm / 4);
   FiveAxisPost post(in_name, out, tools, options);
   post.run(reader);
+  refuse_motion_free(in_name, post.report_);
   return post.report_;
 }
 

@@ -23,6 +23,7 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
   if (!read && !nc::lex_plain_axis_words(text, parsed)) return false;
   const nc::PlainAxisWords& words = read ? *read : parsed;
   if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_)) return false;
+  ++report_.moves;
   if (st.position_known)  // as line() checks every motion
     check_travel(machine_, plain_motion_, *last_corrector_, st.origin_mm, *line_file_,
                  current_line_);

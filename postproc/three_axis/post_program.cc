@@ -3,6 +3,8 @@
 // held back while it changes nothing, and the changed lines recorded.
 #include "postproc/three_axis/post_program.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstring>
 #include <istream>
@@ -98,6 +100,24 @@ void ProgramPost::record_change(const nc::ProgramLine& l, std::size_t before) {
 }
 
 namespace {
+// A program that moves nothing: empty, or every line leader, trailer,
+// comment or a code without motion. Its output would be its input; most
+// likely it is not the program that was meant (a leader that swallowed it,
+// the wrong file), so it is refused with what was read.
+[[noreturn]] void refuse_motion_free(const std::string& in_name, const nc::ProgramReader& reader) {
+  const nc::ReadReport& r = reader.report();
+  const long lines = reader.input_lines();
+  std::string what = lines == 0 ? "the file is empty" : fmt::format("{} lines read", lines);
+  if (r.leader_lines > 0)
+    what += fmt::format(", {} of them tape leader before the '%' on line {}", r.leader_lines,
+                        r.leader_lines + 1);
+  if (r.trailer_lines > 0) what += fmt::format(", {} after the closing '%'", r.trailer_lines);
+  throw InputError(in_name, 0,
+                   what +
+                       "; no block moves the machine, so there is nothing to post: check that "
+                       "this is the program meant");
+}
+
 PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& out,
                     const Machine& machine, const ErrorSet& errors,
                     const maps::VolumetricTable* table, const nc::ProgramSetup& setup,
@@ -122,6 +142,7 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
     post.flush();
     throw;
   }
+  if (post.report().moves == 0) refuse_motion_free(in_name, reader);
   post.finish(reader.original_rest());
   PostReport report = post.report();
   report.read = reader.report();

@@ -70,6 +70,9 @@ struct PostReport {
   std::uint64_t lines_changed = 0;
   std::uint64_t lines_added = 0;
   std::uint64_t points_corrected = 0;
+  /// Blocks that move the machine (feed, rapid, cycle, G28/G30): a program
+  /// without any is refused (nothing to post; it may not be what was meant).
+  std::uint64_t moves = 0;
   double max_correction_mm = 0.0;
   std::uint64_t arcs_kept = 0;        ///< arcs written as one arc
   std::uint64_t arcs_split = 0;       ///< arcs written as several arcs

@@ -85,12 +85,13 @@ void ProgramPost::write_unchanged(std::string_view text, const nc::Block& b,
       emitted_mm_ = interp_.state().position_mm;
     } else {
       const nc::State& st = interp_.state();
-      const nc::Motion& m = fx.motion;
       const bool polar = b.has('@') || b.has('^');
+      // @ ^ name X and Y, from where the output left the controller.
+      const Eigen::Vector2d polar_xy = polar ? polar_reach_mm(b) : Eigen::Vector2d::Zero();
       for (int a = 0; a < 3; ++a) {
         const nc::Word* w = b.find("XYZ"[a]);
-        if (polar && a < 2) {  // @ ^ name X and Y: the nominal end, or its increment
-          emitted_mm_[a] = reach_as_written_mm(m, a);
+        if (polar && a < 2) {
+          emitted_mm_[a] = polar_xy[a];
           continue;
         }
         if (!w) continue;
@@ -125,6 +126,7 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
   const double offset_before = interp_.state().tool_length_mm;
   nc::BlockEffect& fx = fx_;
   interp_.execute(b, fx);
+  if (fx.has_motion) ++report_.moves;
   // A change of tool length offset moves the controlled point where the
   // controller stands, as it moves the interpreter's (LinuxCNC).
   if (const double offset = interp_.state().tool_length_mm; offset != offset_before)
@@ -222,16 +224,35 @@ bool ProgramPost::minimal_axis_words(const nc::Block& b, const BlockStyle& style
   return changed;
 }
 
+double ProgramPost::reach_as_written_mm(const nc::Motion& m, int a) const {
+  return interp_.state().absolute ? m.end_mm[a] : emitted_mm_[a] + (m.end_mm[a] - m.start_mm[a]);
+}
+
+Eigen::Vector2d ProgramPost::polar_reach_mm(const nc::Block& b) const {
+  const nc::State& s = interp_.state();
+  const Vector3d& wo = interp_.work_offset();
+  const nc::Word* r = b.find('@');
+  const nc::Word* t = b.find('^');
+  const Eigen::Vector2d at((emitted_mm_.x() - wo.x()) / s.unit_mm,
+                           (emitted_mm_.y() - wo.y()) / s.unit_mm);
+  const Eigen::Vector2d p =
+      nc::polar_end(at, s.absolute, r ? &r->value : nullptr, t ? &t->value : nullptr);
+  return {p.x() * s.unit_mm + wo.x(), p.y() * s.unit_mm + wo.y()};
+}
+
 bool ProgramPost::polar_needs_change(const nc::Block& b, const nc::BlockEffect& fx,
                                      const Vector3d& cmd) const {
-  // Where the block as written takes the controller: under G91 its
-  // increments from where it stands; under G90 the nominal end on the axes
-  // it names (X and Y through @ ^), where it stands on the others.
+  // Where the block as written takes the controller: X and Y by its polar
+  // words from where the output left it (under G91, and under G90 with one
+  // word, that depends on the correction already written); Z by its word,
+  // as any block's.
   const nc::Motion& m = fx.motion;
   const nc::State& s = interp_.state();
+  const Eigen::Vector2d xy = polar_reach_mm(b);
   for (int a = 0; a < 3; ++a) {
-    const bool named = a < 2 || b.has('Z');
-    const double as_written = named || !s.absolute ? reach_as_written_mm(m, a) : emitted_mm_[a];
+    const double as_written = a < 2                       ? xy[a]
+                              : b.has('Z') || !s.absolute ? reach_as_written_mm(m, a)
+                                                          : emitted_mm_[a];
     if (std::abs(cmd[a] - as_written) / s.unit_mm >= half_unit(decimals())) return true;
   }
   return false;

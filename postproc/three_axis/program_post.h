@@ -170,11 +170,11 @@ class ProgramPost {
                           const Vector3d& cmd, nc::BlockEdit& e, Vector3d& reached_mm) const;
   /// Where a move as written takes the controller on an axis it names: the
   /// nominal end under G90, its increment from where it stands under G91.
-  double reach_as_written_mm(const nc::Motion& m, int a) const {
-    return interp_.state().absolute ? m.end_mm[a] : emitted_mm_[a] + (m.end_mm[a] - m.start_mm[a]);
-  }
-  /// Whether a polar block (@ ^), as written, leaves the controller more
-  /// than half an output unit off cmd on any axis.
+  double reach_as_written_mm(const nc::Motion& m, int a) const;
+  /// X Y (mm) a polar block as written reaches from where the output left
+  /// the controller (nc::polar_end); whether that is more than half an
+  /// output unit off cmd on any axis.
+  Eigen::Vector2d polar_reach_mm(const nc::Block& b) const;
   bool polar_needs_change(const nc::Block& b, const nc::BlockEffect& fx, const Vector3d& cmd) const;
   /// A straight feed move in G94/G95 without polar words: the block as its
   /// first piece with the fewest changed words (minimal_axis_words), the

@@ -267,13 +267,25 @@ TEST(Flatten, SystemParametersAreTheInterpretersState) {
 }
 
 TEST(ProgramReader, TapeFrameAndByteOrderMark) {
-  const std::string p = "\xEF\xBB\xBFNX listing\nheader line\n%\nG0 X1 Y2 Z3\n%\ntrailing text\n";
-  const Read r = read(p);
+  // A Fanuc tape's leader (skipped by the control's label skip) and trailer.
+  nc::ProgramSetup fanuc;
+  fanuc.dialect = nc::Dialect::kFanuc;
+  const std::string p =
+      "\xEF\xBB\xBFNX listing\nheader line\n%\nG0 X1. Y2. Z3.\n%\ntrailing text\n";
+  const Read r = read(p, {}, fanuc);
   EXPECT_EQ(r.out, p);  // every byte, the mark included
   EXPECT_TRUE(r.report.byte_order_mark);
   EXPECT_EQ(r.report.leader_lines, 2);
   EXPECT_EQ(r.report.trailer_lines, 1);
   ASSERT_EQ(r.ends.size(), 1u);
+  // LinuxCNC has no leader: blank lines only before the opening '%'
+  // (tests/postproc/never_silent_test.cc has the refusals).
+  const std::string l = "\xEF\xBB\xBF\n%\nG0 X1 Y2 Z3\n%\ntrailing text\n";
+  const Read lr = read(l);
+  EXPECT_EQ(lr.out, l);
+  EXPECT_EQ(lr.report.leader_lines, 0);
+  EXPECT_EQ(lr.report.trailer_lines, 1);
+  ASSERT_EQ(lr.ends.size(), 1u);
   // Also when the program is flattened: the trailer stays out of it.
   const Read f = read("%\n#1=4\nG0 X#1 Y0 Z0\n%\nG0 X[1/0]\n");
   EXPECT_EQ(f.out, "%\nG0 X4 Y0 Z0\n%\nG0 X[1/0]\n");
