@@ -7,7 +7,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 
 #include "cli/commands.h"
 #include "cli/five_axis_options.h"
@@ -23,15 +22,13 @@
 #include "postproc/three_axis/corrector.h"
 #include "postproc/three_axis/post_program.h"
 #include "postproc/three_axis/post_summary.h"
-#include "postproc/verify/verify.h"
 
 namespace volmap::cli {
 namespace {
 
 // --json: what the post did as one document (docs/post.md "What the post
 // did"), the summary's numbers.
-nlohmann::ordered_json summary_json(const post::PostSummaryInfo& info, const post::PostReport& r,
-                                    const std::optional<post::SelfCheckResult>& check) {
+nlohmann::ordered_json summary_json(const post::PostSummaryInfo& info, const post::PostReport& r) {
   nlohmann::ordered_json flattened = nullptr;
   if (r.read.flattened_from > 0)
     flattened = {{"from_line", r.read.flattened_from},
@@ -65,79 +62,16 @@ nlohmann::ordered_json summary_json(const post::PostSummaryInfo& info, const pos
       {"cycle_warning_count", r.cycle_warning_count},
       {"cycle_warnings", warnings},
       {"self_check",
-       !check ? nlohmann::ordered_json(nullptr)
-              : nlohmann::ordered_json{{"samples", check->moves.samples + check->cycles.samples},
-                                       {"max_deviation_um", check->moves.max_um},
-                                       {"cycles_max_deviation_um", check->cycles.max_um}}}};
+       !r.self_checked ? nlohmann::ordered_json(nullptr)
+                       : nlohmann::ordered_json{{"points", r.self_check.points},
+                                                {"max_deviation_um", r.self_check.max_mm * 1e3}}}};
 }
 
-// The self-check (docs/post.md, "Self-check"): the written program read
-// back and run on the simulated machine, against the program that was read;
-// a departure beyond the tolerance is a refusal, before anything is
-// committed. Canned cycles' and rigid taps' feeds, which the controller
-// computes, may leave it by what the post warned of, no more.
-post::SelfCheckResult check_written(std::istream& nominal, const std::string& in_name,
-                                    const std::string& written, const Machine& m, const ErrorSet& e,
-                                    const maps::VolumetricTable* table, nc::ProgramSetup setup,
-                                    const post::PostOptions& opt, const post::PostReport& r) {
-  setup.dialect = r.read.dialect.dialect;  // the output is read as the input was
-  std::ifstream back(written, std::ios::binary);
-  if (!back) throw std::runtime_error("self-check: cannot read back " + written);
-  post::VerifyOptions vo;
-  vo.outside = opt.outside;
-  vo.subroutine_path = opt.subroutine_path;
-  const double tol_mm = opt.tolerance_mm;
-  static const std::string kWritten = "the written program";
-  post::SelfCheckResult c;
-  try {
-    c = post::self_check(nominal, in_name, back, kWritten, m, e, table, setup, vo, 0.5 * tol_mm);
-  } catch (const InputError& bad) {
-    if (bad.file() != kWritten) throw;
-    throw InputError(in_name, 0,
-                     std::string("self-check: the written program does not read back (") +
-                         bad.what() +
-                         "), so nothing was written. This is a volmap bug: please report it with "
-                         "the program, machine and errors files");
-  }
-  double cycles_allowed_mm = tol_mm;
-  for (const post::PostReport::CycleWarning& w : r.cycle_warnings)
-    cycles_allowed_mm = std::max(cycles_allowed_mm, w.deviation_mm);
-  if (r.cycle_warning_count > r.cycle_warnings.size()) cycles_allowed_mm = 1e300;
-  const auto beyond = [](const post::DeviationStats& st, double allowed_mm) {
-    return st.max_um > allowed_mm * 1e3 * (1 + 1e-9) + 1e-6;
-  };
-  const bool moves = beyond(c.moves, tol_mm);
-  if (!moves && !beyond(c.cycles, cycles_allowed_mm)) return c;
-  const post::DeviationStats& st = moves ? c.moves : c.cycles;
-  throw InputError(
-      in_name, st.worst_nominal_line,
-      fmt::format("self-check: the written program, read back and run on the simulated machine, "
-                  "leaves this block's path by {:.2f} µm (its line {}; the tolerance is {:g} µm), "
-                  "so nothing was written. This is a volmap bug: please report it with the "
-                  "program, machine and errors files (--no-self-check writes the program "
-                  "unchecked)",
-                  st.max_um, st.worst_line, tol_mm * 1e3));
-}
-
-// The program to post: the file, or standard input read whole (the
-// self-check reads it a second time).
-std::istream* open_program(const std::string& path, std::ifstream& file, std::istringstream& text) {
-  if (path != "-") {
-    file.open(path, std::ios::binary);
-    if (!file) throw InputError(path, 0, "cannot open the program; check the path");
-    return &file;
-  }
-  std::ostringstream all;
-  all << std::cin.rdbuf();
-  text.str(std::move(all).str());
-  return &text;
-}
-
-std::string self_check_text(const post::SelfCheckResult& c, double tolerance_um) {
+std::string self_check_text(const post::PostReport& r, double tolerance_um) {
   return fmt::format(
-      "post: self-check: the written program read back and run on the simulated machine: "
-      "largest deviation {:.2f} µm at {} samples (tolerance {:g} µm)\n",
-      std::max(c.moves.max_um, c.cycles.max_um), c.moves.samples + c.cycles.samples, tolerance_um);
+      "post: self-check: every written line read back and run on the simulated machine: {} "
+      "points, the farthest {:.2f} µm from the nominal path (tolerance {:g} µm)\n",
+      r.self_check.points, r.self_check.max_mm * 1e3, tolerance_um);
 }
 
 // The five-axis path (postproc/five_axis/five_axis_post.h).
@@ -311,10 +245,16 @@ Runner register_post(CLI::App& app) {
     opt.keep_arcs = !o->linearize_arcs;
     opt.subroutine_path = o->placement.subroutine_dirs(o->in);
     if (!o->report.empty()) opt.max_recorded_changes = 2000;
+    opt.self_check = !o->no_self_check;
     std::ifstream file_in;
-    std::istringstream stdin_text;  // standard input, kept for the self-check's second read
-    std::istream* in = open_program(o->in, file_in, stdin_text);
-    const std::string in_name = o->in == "-" ? "<stdin>" : o->in;
+    std::istream* in = &std::cin;
+    std::string in_name = "<stdin>";
+    if (o->in != "-") {
+      file_in.open(o->in, std::ios::binary);
+      if (!file_in) throw InputError(o->in, 0, "cannot open the program; check the path");
+      in = &file_in;
+      in_name = o->in;
+    }
     std::vector<std::string> inputs{o->in, o->machine, table ? o->table : o->errors};
     if (!o->placement.var_file.empty()) inputs.push_back(o->placement.var_file);
     if (!o->placement.tool_table.empty()) inputs.push_back(o->placement.tool_table);
@@ -330,23 +270,13 @@ Runner register_post(CLI::App& app) {
               : post::post_program(*in, in_name, out.stream(), m, e, setup, opt);
     const post::PostSummaryInfo info{in_name, o->out, m.name, table ? o->table : o->errors,
                                      o->tolerance_um};
-    std::optional<post::SelfCheckResult> check;
-    if (!o->no_self_check) {
-      out.stream().flush();
-      std::ifstream again;
-      if (o->in != "-") again.open(o->in, std::ios::binary);
-      stdin_text.clear();
-      stdin_text.seekg(0);
-      check = check_written(o->in != "-" ? static_cast<std::istream&>(again) : stdin_text, in_name,
-                            out.temporary_path(), m, e, table ? &*table : nullptr, setup, opt, r);
-    }
     if (report) report->stream() << post::post_report_html(info, r);
     out.commit();
     if (report) report->commit();
     print_read_notes(in_name, r.read, r.flattened_written_as_read);
     std::cerr << post::post_summary_text(info, r);
-    if (check) std::cerr << self_check_text(*check, o->tolerance_um);
-    if (o->json) std::cout << summary_json(info, r, check).dump(2) << '\n';
+    if (r.self_checked) std::cerr << self_check_text(r, o->tolerance_um);
+    if (o->json) std::cout << summary_json(info, r).dump(2) << '\n';
     return 0;
   };
 }

@@ -59,9 +59,6 @@ class AtomicOutput {
   void commit();
 
   const std::string& path() const { return path_; }
-  /// The file being written (flush stream() before reading it back): what a
-  /// command checks before it commits (volmap post's self-check).
-  const std::string& temporary_path() const { return temp_path_; }
 
  private:
   std::string path_;

@@ -24,6 +24,7 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
   const nc::PlainAxisWords& words = read ? *read : parsed;
   if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_)) return false;
   ++report_.moves;
+  if (self_check_) self_check_->nominal(plain_motion_);
   if (st.position_known)  // as line() checks every motion
     check_travel(machine_, plain_motion_, *last_corrector_, st.origin_mm, *line_file_,
                  current_line_);

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <istream>
@@ -19,10 +20,32 @@
 
 namespace volmap::post {
 
+void ProgramPost::finish(const std::string& original_rest) {
+  // (A flattened part that ran as no block, such as a file of subroutine
+  // definitions only, changed nothing either.)
+  if (holding_ || (!hold_begun_ && !original_rest.empty())) {
+    report_.lines_out -= static_cast<std::uint64_t>(
+        std::count(out_buffer_.data(), out_buffer_.data() + out_buffer_.size(), '\n'));
+    out_buffer_.clear();
+    report_.lines_out +=
+        static_cast<std::uint64_t>(std::count(original_rest.begin(), original_rest.end(), '\n'));
+    write_out(original_rest.data(), original_rest.size());
+    report_.flattened_written_as_read = true;
+    holding_ = false;
+  }
+  flush();
+  if (last_byte_ != '\n' && last_byte_ != 0) ++report_.lines_out;  // a last line without '\n'
+  if (self_check_) {
+    report_.self_checked = true;
+    report_.self_check = self_check_->stats();
+  }
+}
+
 void ProgramPost::line(const nc::ProgramLine& l) {
   if (l.flattened && !hold_begun_) begin_hold();
   const bool record = report_.changes.size() < options_.max_recorded_changes;
-  keep_line_ = record;
+  // (The self-check reads the line's whole output: none of it flushed yet.)
+  keep_line_ = record || self_check_;
   const std::size_t before = out_buffer_.size();
   if (l.verbatim) {
     ++report_.lines;
@@ -36,9 +59,16 @@ void ProgramPost::line(const nc::ProgramLine& l) {
     if (interp_.fanuc()) add_decimal_points(l, before);
   }
   if (holding_) check_held_line(l, before);
-  if (record) {
+  if (self_check_) {
+    const std::string_view out(out_buffer_.data() + before, out_buffer_.size() - before);
+    if (l.verbatim)
+      self_check_->skipped(out);
+    else
+      self_check_->written(out, corrector(), l.file ? *l.file : file_, l.line);
+  }
+  if (record) record_change(l, before);
+  if (keep_line_) {
     keep_line_ = false;
-    record_change(l, before);
     if (out_buffer_.size() >= kFlushAt && !holding_) flush();
   }
 }

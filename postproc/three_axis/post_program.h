@@ -30,6 +30,7 @@
 #include "core/model/error_model.h"
 #include "gcode/nc_interpreter.h"
 #include "gcode/program_reader.h"
+#include "postproc/three_axis/self_check.h"
 
 namespace volmap::maps {
 struct VolumetricTable;
@@ -63,6 +64,10 @@ struct PostOptions {
   std::size_t max_recorded_changes = 0;
   /// Where `O<name> call` finds NAME.ngc (LinuxCNC's SUBROUTINE_PATH).
   std::vector<std::string> subroutine_path;
+  /// Every written line read back and its points run on the simulated
+  /// machine before they are committed (self_check.h); a point beyond the
+  /// tolerance is a refusal (InputError) at the line it was written for.
+  bool self_check = true;
 };
 
 struct PostReport {
@@ -116,6 +121,10 @@ struct PostReport {
   double comp_radius_mm = 0.0, comp_bound_mm = 0.0;
   /// How the program was read: its tape frame, whether it was flattened.
   nc::ReadReport read;
+  /// The self-check ran (PostOptions::self_check, a machine with errors):
+  /// the points it measured and the farthest from the nominal path.
+  bool self_checked = false;
+  SelfCheckStats self_check;
 };
 
 PostReport post_program(std::istream& in, const std::string& in_name, std::ostream& out,

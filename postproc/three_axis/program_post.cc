@@ -126,7 +126,10 @@ void ProgramPost::line(std::string_view raw, int number, bool newline,
   const double offset_before = interp_.state().tool_length_mm;
   nc::BlockEffect& fx = fx_;
   interp_.execute(b, fx);
-  if (fx.has_motion) ++report_.moves;
+  if (fx.has_motion) {
+    ++report_.moves;
+    if (self_check_) self_check_->nominal(fx.motion, &fx.more_holes);
+  }
   // A change of tool length offset moves the controlled point where the
   // controller stands, as it moves the interpreter's (LinuxCNC).
   if (const double offset = interp_.state().tool_length_mm; offset != offset_before)

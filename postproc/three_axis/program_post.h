@@ -35,6 +35,7 @@
 #include "postproc/three_axis/corrector.h"
 #include "postproc/three_axis/post_pieces.h"
 #include "postproc/three_axis/post_program.h"
+#include "postproc/three_axis/self_check.h"
 
 namespace volmap::post {
 
@@ -52,6 +53,9 @@ class ProgramPost {
         table_(table),
         options_(options),
         interp_(setup, file) {
+    // (Without errors the output is the input: nothing to check.)
+    if (options.self_check && !corrector().zero())
+      self_check_ = std::make_unique<SelfCheck>(interp_, setup, file, options.tolerance_mm);
     // Where the controller stands at the start, when given: the first move's
     // command creeps from there, which sets the direction of its play.
     if (setup.initial_position_mm) {
@@ -71,22 +75,7 @@ class ProgramPost {
   nc::Interpreter& interpreter() { return interp_; }  ///< the reader sets the dialect
   /// The end of the program: a flattened part in which the post changed no
   /// line goes out as it was read (`original_rest`, the reader's), not flat.
-  void finish(const std::string& original_rest) {
-    // (A flattened part that ran as no block, such as a file of subroutine
-    // definitions only, changed nothing either.)
-    if (holding_ || (!hold_begun_ && !original_rest.empty())) {
-      report_.lines_out -= static_cast<std::uint64_t>(
-          std::count(out_buffer_.data(), out_buffer_.data() + out_buffer_.size(), '\n'));
-      out_buffer_.clear();
-      report_.lines_out +=
-          static_cast<std::uint64_t>(std::count(original_rest.begin(), original_rest.end(), '\n'));
-      write_out(original_rest.data(), original_rest.size());
-      report_.flattened_written_as_read = true;
-      holding_ = false;
-    }
-    flush();
-    if (last_byte_ != '\n' && last_byte_ != 0) ++report_.lines_out;  // a last line without '\n'
-  }
+  void finish(const std::string& original_rest);
   /// Writes out what emit() gathered (also on failure: what was done).
   void flush() {
     write_out(out_buffer_.data(), out_buffer_.size());
@@ -416,7 +405,8 @@ class ProgramPost {
   std::map<double, std::unique_ptr<Corrector>> correctors_;
   const Corrector* last_corrector_ = nullptr;  ///< corrector()'s last answer, for this tool length:
   double last_corrector_length_ = 0.0;
-  nc::BlockEffect fx_;  ///< the line's effect (storage reused line after line)
+  nc::BlockEffect fx_;                     ///< the line's effect (storage reused line after line)
+  std::unique_ptr<SelfCheck> self_check_;  ///< null: off, or a machine without errors
   PostReport report_;
   Vector3d emitted_mm_ = Vector3d::Zero();  ///< last commanded position written
   /// emitted_mm_ is the number the controller read (else the exact command

@@ -26,9 +26,8 @@ struct FeedMove {
   nc::Motion motion;  ///< cycles reduced to their feed-in: R plane to bottom
   double tool_length_mm;
   int line;
-  bool measured;       ///< false for rapids: they move the axes (and take up
-                       ///< lost motion) but are not cutting
-  bool cycle = false;  ///< a canned cycle's feed-in or a rigid tap (the controller computes it)
+  bool measured;  ///< false for rapids: they move the axes (and take up
+                  ///< lost motion) but are not cutting
 };
 
 // Where a program's cutter compensation begins: its side (1 G41, 2 G42),
@@ -94,11 +93,11 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
       continue;
     }
     if (m.kind == nc::MotionKind::kTap) {  // G33.1: in and back out, both cutting
-      out.push_back({m, L, number, true, true});
+      out.push_back({m, L, number, true});
       nc::Motion back = m;
       back.start_mm = m.end_mm;
       back.end_mm = m.start_mm;
-      out.push_back({back, L, number, true, true});
+      out.push_back({back, L, number, true});
       continue;
     }
     if (m.kind == nc::MotionKind::kCycle) {
@@ -112,7 +111,7 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
         out.push_back({over, L, number, false});
         h.start_mm = over.end_mm;
         h.kind = nc::MotionKind::kLinear;
-        out.push_back({h, L, number, true, true});
+        out.push_back({h, L, number, true});
         nc::Motion back = h;
         back.kind = nc::MotionKind::kRapid;
         back.start_mm = h.end_mm;
@@ -126,22 +125,15 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
   return out;
 }
 
-// The simulated machine: the error model of each tool length, or a
-// compensation table's (the machine file's tool only: the post refuses
-// another length with a table).
 class Run {
  public:
-  Run(const Machine& machine, const ErrorSet& errors, OutsidePolicy outside,
-      const maps::VolumetricTable* table = nullptr)
-      : machine_(machine), errors_(errors), outside_(outside), table_(table) {}
+  Run(const Machine& machine, const ErrorSet& errors, OutsidePolicy outside)
+      : machine_(machine), errors_(errors), outside_(outside) {}
   const Corrector& corrector(double L) {
-    auto it = correctors_.find(table_ ? 0.0 : L);
+    auto it = correctors_.find(L);
     if (it == correctors_.end())
-      it = correctors_
-               .emplace(table_ ? 0.0 : L,
-                        table_ ? std::make_unique<Corrector>(machine_, *table_, outside_)
-                               : std::make_unique<Corrector>(machine_, errors_, L, outside_))
-               .first;
+      it =
+          correctors_.emplace(L, std::make_unique<Corrector>(machine_, errors_, L, outside_)).first;
     return *it->second;
   }
 
@@ -149,33 +141,22 @@ class Run {
   const Machine& machine_;
   const ErrorSet& errors_;
   OutsidePolicy outside_;
-  const maps::VolumetricTable* table_;
   std::map<double, std::unique_ptr<Corrector>> correctors_;
-};
-
-// How a measurement goes: every sample searched for its nearest nominal
-// move (verify), or accepted within accept_mm of the move the search starts
-// from (the self-check); into one statistic, or cycles' feed-ins apart.
-struct MeasureMode {
-  double accept_mm = 0.0;
-  DeviationStats* cycles = nullptr;
-  double search_all_beyond_mm = 0.0;  ///< beyond it, the whole nominal path is searched
 };
 
 DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
                              const std::vector<FeedMove>& nominal, Run& run, double step_mm,
-                             const std::string& name, int& line, const VerifyOptions& options,
-                             const MeasureMode& mode);
+                             const std::string& name, int& line, const VerifyOptions& options);
 
 // As measure_moves; an error table left (std::out_of_range from the model,
 // naming the table) is reported at the program's line, and a move too long
 // to sample is refused there.
 DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector<FeedMove>& nominal,
                        Run& run, double step_mm, const std::string& name,
-                       const VerifyOptions& options, const MeasureMode& mode = {}) {
+                       const VerifyOptions& options) {
   int line = 0;
   try {
-    return measure_moves(commanded, nominal, run, step_mm, name, line, options, mode);
+    return measure_moves(commanded, nominal, run, step_mm, name, line, options);
   } catch (const std::out_of_range& e) {
     throw InputError(name, line,
                      std::string("this block leaves the error tables: ") + e.what() +
@@ -185,10 +166,9 @@ DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector
 
 DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
                              const std::vector<FeedMove>& nominal, Run& run, double step_mm,
-                             const std::string& name, int& line, const VerifyOptions& options,
-                             const MeasureMode& mode) {
-  DeviationStats moves;
-  double sum2 = 0, sum2_cycles = 0;
+                             const std::string& name, int& line, const VerifyOptions& options) {
+  DeviationStats st;
+  double sum2 = 0;
   size_t cursor = 0;
   // Lost motion as play: each axis's hysteresis state, -1 .. +1 (0: unknown
   // at the start, the mean of both directions).
@@ -209,15 +189,11 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
                            " mm); check its coordinates");
     const int n = std::max(8, static_cast<int>(samples));
     if (fm.measured) path_mm += len;
-    // The self-check: the program's first move starts where the machine
-    // stood before it (not a point the program commands, nor one the post
-    // could correct): only its end is the program's.
-    const int first_k = mode.accept_mm > 0 && &fm == commanded.data() ? n : 0;
     for (int k = 0; k <= n; ++k) {
       const Vector3d x = nc::point_on(m, static_cast<double>(k) / n);
       c.take_up_play(previous, x, h);
       previous = x;
-      if (!fm.measured || k < first_k) continue;
+      if (!fm.measured) continue;
       const Vector3d actual = x + c.error_with_play(x, h);
       // Nearest nominal move around the cursor. The cursor follows the
       // nearest one, but a move beyond the next costs kSkipPenaltyMm per
@@ -226,69 +202,32 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
       // on the crossing one ahead, which would leave the window behind.
       constexpr double kSkipPenaltyMm = 0.05;
       double best = std::numeric_limits<double>::infinity();
-      if (mode.accept_mm > 0 && cursor < nominal.size())
-        best = nc::distance_to_path(nominal[cursor].motion, actual);
-      if (!(best <= mode.accept_mm)) {
-        best = std::numeric_limits<double>::infinity();
-        double best_score = best;
-        size_t best_i = cursor;
-        const size_t lo = cursor > 2 ? cursor - 2 : 0;
-        const size_t hi = std::min(nominal.size(), cursor + 4);
-        for (size_t i = lo; i < hi; ++i) {
-          const double dist = nc::distance_to_path(nominal[i].motion, actual);
-          best = std::min(best, dist);
-          const double skipped = i > cursor + 1 ? static_cast<double>(i - cursor - 1) : 0.0;
-          if (const double score = dist + kSkipPenaltyMm * skipped; score < best_score) {
-            best_score = score;
-            best_i = i;
-          }
+      double best_score = best;
+      size_t best_i = cursor;
+      const size_t lo = cursor > 2 ? cursor - 2 : 0;
+      const size_t hi = std::min(nominal.size(), cursor + 4);
+      for (size_t i = lo; i < hi; ++i) {
+        const double dist = nc::distance_to_path(nominal[i].motion, actual);
+        best = std::min(best, dist);
+        const double skipped = i > cursor + 1 ? static_cast<double>(i - cursor - 1) : 0.0;
+        if (const double score = dist + kSkipPenaltyMm * skipped; score < best_score) {
+          best_score = score;
+          best_i = i;
         }
-        cursor = best_i;
-        // The self-check: a sample off the window's moves may be a cursor
-        // left behind (a path that runs back over itself), not a departure;
-        // the whole path is searched before it counts (rare: no cost on a
-        // program that keeps the tolerance).
-        if (mode.search_all_beyond_mm > 0 && best > mode.search_all_beyond_mm)
-          for (size_t i = 0; i < nominal.size(); ++i)
-            if (const double dist = nc::distance_to_path(nominal[i].motion, actual); dist < best) {
-              best = dist;
-              cursor = i;
-            }
       }
+      cursor = best_i;
       if (!std::isfinite(best)) continue;
-      const bool apart = mode.cycles && fm.cycle;
-      DeviationStats& st = apart ? *mode.cycles : moves;
-      (apart ? sum2_cycles : sum2) += best * best;
+      sum2 += best * best;
       ++st.samples;
-      if (mode.accept_mm == 0)
-        st.profile.add(path_mm - len + len * k / n, best * 1e3, 0.0, fm.line);
+      st.profile.add(path_mm - len + len * k / n, best * 1e3, 0.0, fm.line);
       if (best * 1e3 > st.max_um) {
         st.max_um = best * 1e3;
         st.worst_line = fm.line;
-        st.worst_nominal_line = cursor < nominal.size() ? nominal[cursor].line : 0;
       }
     }
   }
-  const auto rms_um = [](double sum, std::uint64_t n) {
-    return n ? std::sqrt(sum / static_cast<double>(n)) * 1e3 : 0.0;
-  };
-  moves.rms_um = rms_um(sum2, moves.samples);
-  if (mode.cycles) mode.cycles->rms_um = rms_um(sum2_cycles, mode.cycles->samples);
-  return moves;
-}
-
-// The feed moves the nominal path is made of; none is an error (a
-// measurement of nothing is no success).
-std::vector<FeedMove> measured_path(const std::vector<FeedMove>& nom, const std::string& name) {
-  std::vector<FeedMove> nominal_path;
-  for (const FeedMove& f : nom)
-    if (f.measured) nominal_path.push_back(f);
-  if (nominal_path.empty())
-    throw InputError(name, 0,
-                     "no feed move to measure (G1, G2/G3, a canned cycle's feed-in): verify "
-                     "measures the cutting moves, and this program has none; check that it is "
-                     "the program meant");
-  return nominal_path;
+  st.rms_um = st.samples ? std::sqrt(sum2 / static_cast<double>(st.samples)) * 1e3 : 0.0;
+  return st;
 }
 
 }  // namespace
@@ -309,35 +248,21 @@ VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_n
   for (const CompStart& k : nominal_comps)
     r.comp_radius_mm = std::max(r.comp_radius_mm, k.radius_mm);
   Run run(machine, errors, options.outside);
-  const std::vector<FeedMove> nominal_path = measured_path(nom, nominal_name);
+  std::vector<FeedMove> nominal_path;
+  for (const FeedMove& f : nom)
+    if (f.measured) nominal_path.push_back(f);
+  // A measurement of nothing is no success.
+  if (nominal_path.empty())
+    throw InputError(nominal_name, 0,
+                     "no feed move to measure (G1, G2/G3, a canned cycle's feed-in): verify "
+                     "measures the cutting moves, and this program has none; check that it is "
+                     "the program meant");
   r.before = measure(nom, nominal_path, run, options.sample_step_mm, nominal_name, options);
   r.after = measure(out, nominal_path, run, options.sample_step_mm, compensated_name, options);
   if (r.after.samples == 0)
     throw InputError(compensated_name, 0,
                      "no feed move to measure, where the nominal program has some: check that "
                      "this is the program posted from it");
-  return r;
-}
-
-SelfCheckResult self_check(std::istream& nominal, const std::string& nominal_name,
-                           std::istream& written, const std::string& written_name,
-                           const Machine& machine, const ErrorSet& errors,
-                           const maps::VolumetricTable* table, const nc::ProgramSetup& setup,
-                           const VerifyOptions& options, double accept_mm) {
-  SelfCheckResult r;
-  std::vector<CompStart> nominal_comps, written_comps;
-  const std::vector<FeedMove> nom = feed_moves(nominal, nominal_name, setup, machine.tool_length_mm,
-                                               options.subroutine_path, nominal_comps);
-  const std::vector<FeedMove> out =
-      feed_moves(written, written_name, setup, machine.tool_length_mm, {}, written_comps);
-  check_same_compensation(nominal_comps, written_comps, written_name);
-  std::vector<FeedMove> nominal_path;
-  for (const FeedMove& f : nom)
-    if (f.measured) nominal_path.push_back(f);
-  if (nominal_path.empty()) return r;  // (no feed move: nothing the tolerance is about)
-  Run run(machine, errors, options.outside, table);
-  r.moves = measure(out, nominal_path, run, options.sample_step_mm, written_name, options,
-                    MeasureMode{accept_mm, &r.cycles, 2 * accept_mm});
   return r;
 }
 

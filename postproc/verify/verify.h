@@ -22,19 +22,14 @@
 #include "gcode/nc_interpreter.h"
 #include "postproc/verify/deviation_profile.h"
 
-namespace volmap::maps {
-struct VolumetricTable;
-}
-
 namespace volmap::post {
 
 struct DeviationStats {
   double max_um = 0.0;
   double rms_um = 0.0;
   std::uint64_t samples = 0;
-  int worst_line = 0;          ///< line of the program where the maximum occurs
-  int worst_nominal_line = 0;  ///< the nominal program's line of the move nearest to it
-  DeviationProfile profile;    ///< along the tool path, for verify --report
+  int worst_line = 0;        ///< line of the program where the maximum occurs
+  DeviationProfile profile;  ///< along the tool path, for verify --report
 };
 
 struct VerifyResult {
@@ -56,29 +51,8 @@ struct VerifyOptions {
   std::function<void(const std::string& program, std::size_t done, std::size_t total)> progress;
 };
 
-/// volmap post's self-check (docs/post.md, "Self-check"): the program the
-/// post wrote, read back by the interpreter and run on the simulated machine
-/// (the model the post used: `errors`, or `table` when not null), its feed
-/// moves sampled as verify samples them, each sample's distance to the
-/// nominal path of the program that was read. A sample within
-/// `accept_mm` of the move verify's search starts from is not searched
-/// further (the check asks only whether the tolerance holds), so max_um is
-/// exact only beyond accept_mm. Canned cycles' feed moves, which the
-/// controller computes (the post warns of them), are measured apart. The
-/// program's first move starts where the machine stood before the program:
-/// only its end is measured.
-struct SelfCheckResult {
-  DeviationStats moves;   ///< every feed move but canned cycles' feed-ins
-  DeviationStats cycles;  ///< canned cycles' feed-ins
-};
-SelfCheckResult self_check(std::istream& nominal, const std::string& nominal_name,
-                           std::istream& written, const std::string& written_name,
-                           const Machine& machine, const ErrorSet& errors,
-                           const maps::VolumetricTable* table, const nc::ProgramSetup& setup,
-                           const VerifyOptions& options, double accept_mm);
-
 /// Refuses (InputError) a nominal program with no feed move to measure
-/// (verify measures the cutting moves; rapids only, or no motion at all),
+/// (verify measures the cutting moves: rapids only, or no motion at all),
 /// and a compensated one with none, rather than a success on 0 samples.
 VerifyResult verify_programs(std::istream& nominal, const std::string& nominal_name,
                              std::istream& compensated, const std::string& compensated_name,
