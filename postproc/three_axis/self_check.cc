@@ -38,6 +38,14 @@ SelfCheck::SelfCheck(const nc::Interpreter& post, const nc::ProgramSetup& setup,
                      const std::string& file, double tolerance_mm)
     : post_(post), interp_(setup, file), tolerance_mm_(tolerance_mm), file_(file) {}
 
+void SelfCheck::set_anchor_radius(const Corrector& c) {
+  // The expansion's remainder at the radius a quarter of the tolerance:
+  // kappa (r^2/2 + sqrt(3)/2 h r) = tol / 4 (at most 20 mm).
+  const double kappa = c.curvature_bound(), b = 0.8660254037844387 * kAnchorStepMm;
+  anchor_radius_mm_ =
+      kappa > 0 ? std::min(20.0, -b + std::sqrt(b * b + tolerance_mm_ / (2 * kappa))) : 20.0;
+}
+
 void SelfCheck::push(const nc::Motion& m) { current_.push_back({m, true}); }
 
 void SelfCheck::nominal(const nc::Motion& m, const std::vector<nc::Motion>* more_holes) {
@@ -75,6 +83,7 @@ void SelfCheck::written(std::string_view text, const Corrector& c, const std::st
   if (!dialect_set_) {
     interp_.set_dialect(post_.setup().dialect);
     dialect_set_ = true;
+    set_anchor_radius(c);
   }
   while (!text.empty()) {
     const std::size_t nl = text.find('\n');
@@ -154,17 +163,45 @@ void SelfCheck::take_up(const Corrector& c, const Vector3d& to) {
   previous_ = to;
 }
 
-Vector3d SelfCheck::actual(const Corrector& c, const Vector3d& x) const {
+Vector3d SelfCheck::actual(const Corrector& c, const Vector3d& x) {
   // The play at an end (or unknown, 0) on every axis: the error of those
-  // approach directions, one evaluation (error_with_play's mean of the two
-  // directions is it to the model's second order).
+  // approach directions (error_with_play's mean of the two directions is
+  // it to the model's second order); else the play's blend, exactly.
+  bound_mm_ = 0.0;
   ApproachDirections d{};
   for (int a = 0; a < 3; ++a) {
     const double h = play_[a];
     if (h != 0.0 && h != 1.0 && h != -1.0) return x + c.error_with_play(x, play_);
     d[static_cast<std::size_t>(a)] = static_cast<std::int8_t>(h);
   }
-  return x + c.error_at(x, d);
+  // Near an anchor of the same directions, inside the box where the
+  // field's bounds hold: its first-order expansion, off the model by at
+  // most kappa/2 |dx|^2 (the curvature bound) plus the forward difference's
+  // error, sqrt(3) kappa h / 2 |dx| (docs/post.md "Self-check").
+  const double kappa = c.curvature_bound();
+  const Vector3d dx = x - anchor_x_;
+  const double r = dx.norm();
+  if (anchor_valid_ && !exact_ && d == anchor_dirs_ && r <= anchor_radius_mm_ &&
+      c.in_bound_box(x)) {
+    bound_mm_ = kappa * (0.5 * r * r + 0.8660254037844387 * kAnchorStepMm * r);
+    return x + anchor_e_ + anchor_j_ * dx;
+  }
+  const Vector3d e = c.error_at(x, d);
+  anchor_valid_ = std::isfinite(kappa) && c.in_bound_box(x);
+  if (anchor_valid_) {
+    // A new anchor: the error and its forward differences (three more
+    // evaluations, kept for the points within kAnchorRadiusMm).
+    for (int a = 0; a < 3; ++a) {
+      Vector3d xh = x;
+      xh[a] += kAnchorStepMm;
+      anchor_valid_ = anchor_valid_ && c.in_bound_box(xh);
+      anchor_j_.col(a) = (c.error_at(xh, d) - e) / kAnchorStepMm;
+    }
+    anchor_x_ = x;
+    anchor_e_ = e;
+    anchor_dirs_ = d;
+  }
+  return x + e;
 }
 
 bool SelfCheck::smooth_line(const nc::Motion& m, const Corrector& c) {
@@ -180,14 +217,20 @@ bool SelfCheck::smooth_line(const nc::Motion& m, const Corrector& c) {
     return false;
   const double sag = v.squaredNorm() / 8 * c.curvature_bound();
   if (!(sag < 0.25 * tolerance_mm_)) return false;
-  const Vector3d start = have_actual_ ? last_actual_ : actual(c, previous_);
+  double start_bound = last_bound_mm_;
+  Vector3d start = last_actual_;
+  if (!have_actual_) {
+    start = actual(c, previous_);
+    start_bound = bound_mm_;
+  }
   previous_ = m.end_mm;
   last_actual_ = actual(c, m.end_mm);
+  last_bound_mm_ = bound_mm_;
   have_actual_ = true;
   const Nominal* near = nearest(last_actual_);
   if (!near || near->motion.kind != nc::MotionKind::kLinear) return false;
-  const double d = std::max(nc::distance_to_path(near->motion, last_actual_),
-                            nc::distance_to_path(near->motion, start)) +
+  const double d = std::max(nc::distance_to_path(near->motion, last_actual_) + last_bound_mm_,
+                            nc::distance_to_path(near->motion, start) + start_bound) +
                    sag;
   if (d > tolerance_mm_) return false;  // beyond it by the bound: the points decide
   ++stats_.points;
@@ -252,10 +295,19 @@ void SelfCheck::measure(const Vector3d& x, const Corrector& c, const std::string
     return;
   }
   last_actual_ = actual(c, x);
+  last_bound_mm_ = bound_mm_;
   have_actual_ = true;
   ++stats_.points;
   if (!nearest(last_actual_)) return;  // no nominal feed yet: a move the input did not cut
-  const double best = best_mm_;
+  if (best_mm_ + last_bound_mm_ > tolerance_mm_ && last_bound_mm_ > 0) {
+    // Beyond it by the expansion's bound: the model itself decides.
+    exact_ = true;
+    last_actual_ = actual(c, x);
+    exact_ = false;
+    last_bound_mm_ = 0.0;
+    nearest(last_actual_);
+  }
+  const double best = best_mm_ + last_bound_mm_;
   stats_.max_mm = std::max(stats_.max_mm, best);
   if (best <= tolerance_mm_ * (1 + 1e-9)) return;
   throw InputError(

@@ -20,6 +20,7 @@
 // reading against LinuxCNC's own).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -42,6 +43,11 @@ class SelfCheck {
   static constexpr double kLineStepMm = 0.25;  ///< as verify samples (VerifyOptions)
   static constexpr double kArcStepMm = 0.25;
   static constexpr int kArcSamples = 16;
+  /// The model is evaluated at anchors; points near one take its
+  /// first-order expansion (forward differences kAnchorStepMm apart) and
+  /// the curvature bound's remainder, at most a quarter of the tolerance;
+  /// a point beyond the tolerance by that bound is evaluated exactly.
+  static constexpr double kAnchorStepMm = 0.1;
 
   /// `post`: the post's interpreter, whose dialect (the reader's choice)
   /// this one takes at the first line.
@@ -71,8 +77,9 @@ class SelfCheck {
   /// sample it instead.
   bool smooth_line(const nc::Motion& m, const Corrector& c);
   void hole(const nc::Motion& h, const Corrector& c, const std::string& file, int line);
-  /// The actual tool tip at commanded point x (mm), with the play.
-  Eigen::Vector3d actual(const Corrector& c, const Eigen::Vector3d& x) const;
+  /// The actual tool tip at commanded point x (mm), with the play; how far
+  /// it may be off the model's (an anchor's expansion) in bound_mm_.
+  Eigen::Vector3d actual(const Corrector& c, const Eigen::Vector3d& x);
   /// The play taken up from previous_ to `to`, which becomes previous_.
   void take_up(const Corrector& c, const Eigen::Vector3d& to);
   /// The actual tip at commanded x measured (InputError beyond the tolerance).
@@ -99,7 +106,16 @@ class SelfCheck {
   const Nominal* nearest(const Eigen::Vector3d& p);
   double best_mm_ = 0.0;
   Eigen::Vector3d last_actual_ = Eigen::Vector3d::Zero();  ///< the actual tip at previous_
+  double last_bound_mm_ = 0.0;                             ///< and how far it may be off
   bool have_actual_ = false;
+  double bound_mm_ = 0.0;  ///< actual()'s bound
+  Eigen::Vector3d anchor_x_ = Eigen::Vector3d::Zero(), anchor_e_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d anchor_j_ = Eigen::Matrix3d::Zero();
+  ApproachDirections anchor_dirs_{};
+  bool anchor_valid_ = false;
+  bool exact_ = false;  ///< actual() evaluates the model, no expansion
+  double anchor_radius_mm_ = 0.0;
+  void set_anchor_radius(const Corrector& c);
   Eigen::Vector3d previous_ = Eigen::Vector3d::Zero();  ///< where the play was last taken up to
   Eigen::Vector3d play_ = Eigen::Vector3d::Zero();      ///< each axis's play state, -1 .. 1
   bool moved_ = false;  ///< the written program moved (its first start: where the machine stood)
