@@ -20,7 +20,10 @@ namespace volmap::post {
 void ProgramPost::line(const nc::ProgramLine& l) {
   if (l.flattened && !hold_begun_) begin_hold();
   const bool record = report_.changes.size() < options_.max_recorded_changes;
-  keep_line_ = record;
+  // The line's output stays in the buffer, from `before` on, until the
+  // line is done: add_decimal_points, check_held_line and record_change
+  // read it there (a flush inside the line made `size() - before` wrap).
+  keep_line_ = true;
   const std::size_t before = out_buffer_.size();
   if (l.verbatim) {
     ++report_.lines;
@@ -34,11 +37,9 @@ void ProgramPost::line(const nc::ProgramLine& l) {
     if (interp_.fanuc()) add_decimal_points(l, before);
   }
   if (holding_) check_held_line(l, before);
-  if (record) {
-    keep_line_ = false;
-    record_change(l, before);
-    if (out_buffer_.size() >= kFlushAt && !holding_) flush();
-  }
+  if (record) record_change(l, before);
+  keep_line_ = false;
+  if (out_buffer_.size() >= kFlushAt && !holding_) flush();
 }
 
 // The flattened part is held back while each of its lines comes out as it
