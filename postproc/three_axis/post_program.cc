@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "core/common/input_error.h"
+#include "core/common/internal_error.h"
 #include "maps/tables/volumetric_table.h"
 #include "postproc/three_axis/corrector.h"
 #include "postproc/three_axis/program_post.h"
@@ -110,15 +111,27 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
   ProgramPost post(in_name, out, machine, errors, setup, options, table);
   nc::ProgramReader reader(in, in_name, post.interpreter(), options.subroutine_path);
   nc::ProgramLine l;
+  bool reading = true;  // in the reader (the line after l), else posting l
   try {
-    while (reader.next(l)) post.line(l);
-  } catch (const std::out_of_range& e) {
+    while ((reading = true, reader.next(l))) {
+      reading = false;
+      post.line(l);
+    }
+  } catch (const OutsideTable& e) {
     // An error table's range (the message names the table's file:line):
     // the block that left it is the program's line (docs/model.md).
     post.flush();
     throw InputError(l.file ? *l.file : in_name, l.line,
                      std::string("this block leaves the error tables: ") + e.what() +
                          " (`post.clamp` holds the end values)");
+  } catch (const std::exception& e) {
+    post.flush();
+    // A bug, not the input's fault: said so, at the line it happened on.
+    if (reading)
+      throw_if_unexpected(e, in_name, static_cast<int>(reader.input_lines()));
+    else
+      throw_if_unexpected(e, l.file ? *l.file : in_name, l.line);
+    throw;
   } catch (...) {
     post.flush();
     throw;
