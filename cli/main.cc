@@ -14,6 +14,7 @@
 #include "cli/commands.h"
 #include "cli/installed_samples.h"
 #include "cli/message_wording.h"
+#include "core/common/internal_error.h"
 
 namespace volmap::cli {
 namespace {
@@ -82,10 +83,22 @@ int main(int argc, char** argv) {
               << "--help)\n";
     return 2;
   } catch (const std::exception& e) {
+    // Every exception that reaches here and is not an error volmap raises
+    // on purpose (core/common/internal_error.h) is a bug: said so, with the
+    // input's file:line when the code that caught it knew them.
+    if (!volmap::is_expected_error(e)) {
+      std::cerr << "volmap: " << volmap::internal_error_message(e) << "\n";
+      return 1;
+    }
     std::string msg = wording(e.what());
     for (char& c : msg)
       if (c == '\n') c = ' ';
     std::cerr << "volmap: " << msg << "\n";
+    return 1;
+  } catch (...) {
+    std::cerr << "volmap: internal error: an exception that is not a std::exception; this is a "
+                 "bug in volmap, not a fault of the input: please report it with the command "
+                 "line and its input files\n";
     return 1;
   }
   return 2;

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "core/common/input_error.h"
+#include "core/common/internal_error.h"
 #include "core/explain/axis_labels.h"
 #include "core/model/error_model.h"
 #include "core/model/gain_evaluator.h"
@@ -122,6 +123,7 @@ void add_row_equations(Observations& obs, EquationList& eqs, ModelsByTool& model
       try {
         predicted_wp_um = baseline->exact(u, dir).dP_mm * 1e3;
       } catch (const std::exception& e) {
+        throw_if_unexpected(e, rec.file, rec.line[i]);  // a bug is said to be one
         throw InputError(rec.file, rec.line[i],
                          fmt::format("the baseline cannot be evaluated here: {}", e.what()));
       }

@@ -12,6 +12,7 @@
 #include <cmath>
 
 #include "core/common/input_error.h"
+#include "core/common/internal_error.h"
 #include "core/common/units.h"
 #include "core/measure/identifiability.h"
 #include "core/measure/identify_columns.h"
@@ -85,6 +86,7 @@ class ExactResiduals {
       try {
         dv_um = model.exact(obs_.u[row], obs_.dir[row]).dP_mm * units::kUmPerMm;
       } catch (const std::exception& ex) {
+        throw_if_unexpected(ex, rec_.file, obs_.line[row]);  // a bug is said to be one
         throw InputError(rec_.file, obs_.line[row],
                          std::string("the model cannot be evaluated here: ") + ex.what());
       }

@@ -29,6 +29,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/common/internal_error.h"
 #include "core/common/units.h"
 
 namespace volmap {
@@ -82,14 +83,14 @@ void throw_outside(const AxisErrorTable& table, double q) {
     message +=
         " axis position is not a number; fix the program or model that "
         "produced it";
-    throw std::out_of_range(message);
+    throw OutsideTable(message);
   }
   message += " axis position " + format_position(table, q) + " is outside its error table (" +
              format_position(table, table.min_position()) + " .. " +
              format_position(table, table.max_position()) +
              "); keep the axis within the measured range, extend the table, or "
              "evaluate with the clamp policy";
-  throw std::out_of_range(message);
+  throw OutsideTable(message);
 }
 }  // namespace detail
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/common/internal_error.h"
 #include "core/kinematics/kinematics.h"
 
 namespace volmap::maps {
@@ -209,9 +210,8 @@ bool bring_inside(const GridAxis& g, double& q, OutsidePolicy outside) {
   if (outside == OutsidePolicy::kError || std::isnan(q)) {
     const double k = is_rotary(g.axis) ? 180.0 / M_PI : 1.0;
     const char* unit = is_rotary(g.axis) ? "deg" : "mm";
-    throw std::out_of_range(fmt::format("{}={:g} {} is outside the table's grid {:g}..{:g} {}",
-                                        axis_char(g.axis), q * k, unit, g.start * k, g.end * k,
-                                        unit));
+    throw OutsideTable(fmt::format("{}={:g} {} is outside the table's grid {:g}..{:g} {}",
+                                   axis_char(g.axis), q * k, unit, g.start * k, g.end * k, unit));
   }
   q = q < g.start ? g.start : g.end;
   return true;

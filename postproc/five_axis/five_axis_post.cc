@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "core/common/internal_error.h"
 #include "core/common/units.h"
 #include "gcode/g_codes.h"
 #include "gcode/nc_path.h"
@@ -283,6 +284,7 @@ void FiveAxisPost::run(FiveAxisReader& reader) {
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
+      throw_if_unexpected(e, file_, line_);  // a bug is said to be one
       fail(e.what());
     }
   }

@@ -7,6 +7,7 @@
 
 #include "core/common/golden_section.h"
 #include "core/common/input_error.h"
+#include "core/common/internal_error.h"
 #include "core/common/units.h"
 #include "gcode/nc_path.h"
 #include "postproc/five_axis/five_axis_post.h"
@@ -209,6 +210,7 @@ FiveAxisDeviation nominal_deviation(Verifier& v, std::istream& nominal,
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
+      throw_if_unexpected(e, nominal_name, l.line);  // a bug is said to be one
       throw InputError(nominal_name, l.line, e.what());
     }
   }
@@ -263,6 +265,7 @@ FiveAxisDeviation compensated_deviation(Verifier& v, std::istream& compensated,
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
+      throw_if_unexpected(e, compensated_name, l.line);  // a bug is said to be one
       throw InputError(compensated_name, l.line, e.what());
     }
     u_prev = u1;

@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "core/common/input_error.h"
+#include "core/common/internal_error.h"
 #include "maps/tables/volumetric_table.h"
 #include "postproc/three_axis/corrector.h"
 #include "postproc/three_axis/program_post.h"
@@ -44,8 +45,11 @@ void ProgramPost::finish(const std::string& original_rest) {
 void ProgramPost::line(const nc::ProgramLine& l) {
   if (l.flattened && !hold_begun_) begin_hold();
   const bool record = report_.changes.size() < options_.max_recorded_changes;
-  // (The self-check reads the line's whole output: none of it flushed yet.)
-  keep_line_ = record || self_check_;
+  // The line's output stays in the buffer, from `before` on, until the
+  // line is done: add_decimal_points, check_held_line, the self-check and
+  // record_change read it there (a flush inside the line made
+  // `size() - before` wrap).
+  keep_line_ = true;
   const std::size_t before = out_buffer_.size();
   if (l.verbatim) {
     ++report_.lines;
@@ -67,10 +71,8 @@ void ProgramPost::line(const nc::ProgramLine& l) {
       self_check_->written(out, corrector(), l.file ? *l.file : file_, l.line);
   }
   if (record) record_change(l, before);
-  if (keep_line_) {
-    keep_line_ = false;
-    if (out_buffer_.size() >= kFlushAt && !holding_) flush();
-  }
+  keep_line_ = false;
+  if (out_buffer_.size() >= kFlushAt && !holding_) flush();
 }
 
 // The flattened part is held back while each of its lines comes out as it
@@ -159,15 +161,27 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
   ProgramPost post(in_name, out, machine, errors, setup, options, table);
   nc::ProgramReader reader(in, in_name, post.interpreter(), options.subroutine_path);
   nc::ProgramLine l;
+  bool reading = true;  // in the reader (the line after l), else posting l
   try {
-    while (reader.next(l)) post.line(l);
-  } catch (const std::out_of_range& e) {
+    while ((reading = true, reader.next(l))) {
+      reading = false;
+      post.line(l);
+    }
+  } catch (const OutsideTable& e) {
     // An error table's range (the message names the table's file:line):
     // the block that left it is the program's line (docs/model.md).
     post.flush();
     throw InputError(l.file ? *l.file : in_name, l.line,
                      std::string("this block leaves the error tables: ") + e.what() +
                          " (`post.clamp` holds the end values)");
+  } catch (const std::exception& e) {
+    post.flush();
+    // A bug, not the input's fault: said so, at the line it happened on.
+    if (reading)
+      throw_if_unexpected(e, in_name, static_cast<int>(reader.input_lines()));
+    else
+      throw_if_unexpected(e, l.file ? *l.file : in_name, l.line);
+    throw;
   } catch (...) {
     post.flush();
     throw;

@@ -370,7 +370,7 @@ class ProgramPost {
     report_.lines_out += line_ending_size_ > 0 && line_ending_[line_ending_size_ - 1] == '\n';
     if (out_buffer_.size() >= kFlushAt && !holding_ && !keep_line_) flush();
   }
-  bool keep_line_ = false;  ///< the line's output stays in the buffer until it is recorded
+  bool keep_line_ = false;  ///< the line's output stays in the buffer until the line is done
   /// PostOptions::max_recorded_changes: line l, when its output (from byte
   /// `before` of the buffer on) is not the line as read, into the report.
   void record_change(const nc::ProgramLine& l, std::size_t before);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/common/input_error.h"
+#include "core/common/internal_error.h"
 #include "gcode/nc_path.h"
 #include "gcode/program_reader.h"
 #include "postproc/three_axis/corrector.h"
@@ -61,15 +62,9 @@ void check_same_compensation(const std::vector<CompStart>& nominal,
   }
 }
 
-// Feed moves of a program, as the interpreter sees them.
-std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
-                                 const nc::ProgramSetup& setup, double default_tool_mm,
-                                 const std::vector<std::string>& subroutine_path,
-                                 std::vector<CompStart>& comps) {
-  nc::Interpreter interp(setup, name);
-  nc::ProgramReader reader(in, name, interp, subroutine_path);
-  std::vector<FeedMove> out;
-  nc::ProgramLine l;
+// The feed moves of the lines `reader` gives (l: the line read last).
+void feed_moves_of(nc::ProgramReader& reader, nc::Interpreter& interp, double default_tool_mm,
+                   nc::ProgramLine& l, std::vector<FeedMove>& out, std::vector<CompStart>& comps) {
   nc::Block b;
   nc::BlockEffect fx;
   while (reader.next(l)) {
@@ -122,6 +117,23 @@ std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
     }
     out.push_back({m, L, number, true});
   }
+}
+
+// Feed moves of a program, as the interpreter sees them.
+std::vector<FeedMove> feed_moves(std::istream& in, const std::string& name,
+                                 const nc::ProgramSetup& setup, double default_tool_mm,
+                                 const std::vector<std::string>& subroutine_path,
+                                 std::vector<CompStart>& comps) {
+  nc::Interpreter interp(setup, name);
+  nc::ProgramReader reader(in, name, interp, subroutine_path);
+  std::vector<FeedMove> out;
+  nc::ProgramLine l;
+  try {
+    feed_moves_of(reader, interp, default_tool_mm, l, out, comps);
+  } catch (const std::exception& e) {
+    throw_if_unexpected(e, l.file ? *l.file : name, l.line);  // a bug: said so, at its line
+    throw;
+  }
   return out;
 }
 
@@ -148,7 +160,7 @@ DeviationStats measure_moves(const std::vector<FeedMove>& commanded,
                              const std::vector<FeedMove>& nominal, Run& run, double step_mm,
                              const std::string& name, int& line, const VerifyOptions& options);
 
-// As measure_moves; an error table left (std::out_of_range from the model,
+// As measure_moves; an error table left (OutsideTable from the model,
 // naming the table) is reported at the program's line, and a move too long
 // to sample is refused there.
 DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector<FeedMove>& nominal,
@@ -157,10 +169,13 @@ DeviationStats measure(const std::vector<FeedMove>& commanded, const std::vector
   int line = 0;
   try {
     return measure_moves(commanded, nominal, run, step_mm, name, line, options);
-  } catch (const std::out_of_range& e) {
+  } catch (const OutsideTable& e) {
     throw InputError(name, line,
                      std::string("this block leaves the error tables: ") + e.what() +
                          " (`verify.clamp` holds the end values)");
+  } catch (const std::exception& e) {
+    throw_if_unexpected(e, name, line);  // a bug: said so, at its line
+    throw;
   }
 }
 

@@ -6,6 +6,7 @@
 // FUP of negatives, vacant variables): volmap's reading of the Fanuc
 // program must reach the points rs274 reaches running the translation.
 // Then each is posted with the sample machine's errors and verified.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -144,6 +145,62 @@ TEST(FanucDialect, KRepeatsAreWrittenOutAsLRepeatsAre) {
     holes +=
         fx.motion.kind == nc::MotionKind::kCycle ? 1 + static_cast<int>(fx.more_holes.size()) : 0;
   EXPECT_EQ(holes, 3) << posted;
+}
+
+// A Fanuc number as CAM posts write it: "-.27", "12.", "173.913".
+std::string fanuc_number(double v) {
+  std::string t = fmt::format("{:.3f}", v);
+  while (t.back() == '0') t.pop_back();
+  if (t.rfind("0.", 0) == 0) t.erase(0, 1);
+  if (t.rfind("-0.", 0) == 0) t.erase(1, 1);
+  return t == "-." || t == "." ? "0." : t;
+}
+
+// Issue 35's crash (`volmap: basic_string::_M_create`, exit 1): a Fanuc
+// program whose output passes the post's 64 KiB buffer. The buffer was
+// flushed inside a line that changed, and the decimal-point pass then
+// read the line's output from where it began (a size that wrapped).
+TEST(FanucDialect, AProgramLongerThanTheOutputBufferIsPosted) {
+  std::string program = "%\nO0042 (ARCS)\nN10 G90 G17 G21 G40 G80\nN20 G00 X-20. Y-30. Z5.\n";
+  program += "N30 G01 Z-1. F100.\n";
+  int n = 40;
+  double x = -20.0;
+  for (int row = 0; row < 60; ++row) {
+    const double y = -30.0 + row, dir = row % 2 ? -1.0 : 1.0;
+    for (int k = 0; k < 37; ++k, n += 10) {
+      x += dir * 1.08;  // half circles of radius .54, "I.54 J0" or "I-.54 J0"
+      program += fmt::format("N{} G0{} X{} Y{} I{} J0 F173.913\n", n, k % 2 ? 2 : 3,
+                             fanuc_number(x), fanuc_number(y), fanuc_number(dir * .54));
+    }
+    program += fmt::format("N{} G01 Y{}\n", n, fanuc_number(y + 1));
+    n += 10;
+  }
+  program += fmt::format("N{} G00 Z5.\nN{} M30\n%\n", n, n + 10);
+  ASSERT_GT(program.size(), std::size_t{1} << 16);
+  const Machine m = test::sample_machine("hsu-3axis");
+  const ErrorSet e = test::sample_errors("hsu-3axis");
+  nc::ProgramSetup s;
+  s.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
+  s.dialect = nc::Dialect::kFanuc;
+  auto posted = [&](std::size_t recorded) {
+    std::istringstream in(program);
+    std::ostringstream out;
+    post::PostOptions o;
+    o.max_recorded_changes = recorded;
+    const post::PostReport r = post::post_program(in, "arcs.nc", out, m, e, s, o);
+    EXPECT_GT(r.lines_changed, r.lines / 2);
+    return out.str();
+  };
+  std::string plain;
+  ASSERT_NO_THROW(plain = posted(0));
+  // The same bytes as when every line is recorded for --report (that kept
+  // each line's output in the buffer and never crashed).
+  EXPECT_EQ(plain, posted(100000));
+  std::istringstream nominal(program), compensated(plain);
+  const post::VerifyResult v =
+      post::verify_programs(nominal, "arcs.nc", compensated, "posted.nc", m, e, s, {});
+  EXPECT_GT(v.before.max_um, 5.0);
+  EXPECT_LT(v.after.max_um, 1.0) << "worst at line " << v.after.worst_line;
 }
 
 TEST(FanucDialect, TheChoiceIsSaidOnStderrAndCanBeGiven) {
