@@ -9,6 +9,7 @@
 // output).
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -37,10 +38,13 @@ inline void require(bool ok) {
 }
 
 /// The NC reader: lexing and interpretation line by line, as volmap post
-/// and verify read a program, with and without a known initial position.
+/// and verify read a program, with and without a known initial position,
+/// as LinuxCNC and as Fanuc (--dialect fanuc) read it.
 inline void nc_reader(std::string_view program) {
-  for (bool initial : {false, true}) {
+  for (int run = 0; run < 4; ++run) {
+    const bool initial = run & 1;
     nc::ProgramSetup setup;
+    setup.dialect = run & 2 ? nc::Dialect::kFanuc : nc::Dialect::kLinuxCnc;
     setup.work_offset_mm[0] = Eigen::Vector3d(250, 200, 100);
     setup.work_offset_mm[1] = Eigen::Vector3d(-10, 5, 0);
     setup.tool_length_mm[1] = 50.0;
@@ -82,12 +86,15 @@ inline void nc_reader(std::string_view program) {
 }
 
 /// volmap post (three axes) on the sample machine and its errors: the first
-/// byte chooses the options (--keep-arcs, --expand-cycles, the tolerance,
-/// decimals), the rest is the program, of which the first 16 lines are
-/// posted (arcs of up to 65 536 pieces each stay well inside the time
-/// limit). The program is posted with and without the shortcut of plain
-/// lines: both must refuse it with the same InputError or write the same
-/// bytes and count the same.
+/// byte chooses the options (bit 0 --keep-arcs, 1 --expand-cycles, 2 the
+/// tolerance, 3 decimals, 4 and 5 the dialect: auto, fanuc, linuxcnc,
+/// fanuc; 6 G28's and G30's positions #5161.. and #5181.. given, as a
+/// --var-file gives them), the rest is the program, of which the first 16
+/// lines are posted (arcs of up to 65 536 pieces each stay well inside the
+/// time limit). The program is posted with and without the shortcut of
+/// plain lines: both must refuse it with the same InputError or write the
+/// same bytes and count the same. Cutters for G41/G42 D1 and D2 (Fanuc:
+/// the D offset number reads tool n's row).
 // Programs with parameters, expressions and O-word control flow: the
 // program reader flattens them into the interpreter (a bounded number of
 // executed lines: an endless loop is refused, not waited for).
@@ -119,7 +126,11 @@ inline void nc_flatten_as(std::string_view program, nc::Dialect dialect) {
   }
 }
 
-inline void nc_flatten(std::string_view program) { nc_flatten_as(program, nc::Dialect::kAuto); }
+// As the program's head says (--dialect auto), then as Fanuc Custom Macro B.
+inline void nc_flatten(std::string_view program) {
+  nc_flatten_as(program, nc::Dialect::kAuto);
+  nc_flatten_as(program, nc::Dialect::kFanuc);
+}
 // The same read as Fanuc Custom Macro B (--dialect fanuc).
 inline void nc_fanuc(std::string_view program) { nc_flatten_as(program, nc::Dialect::kFanuc); }
 
@@ -145,6 +156,16 @@ inline void post(std::string_view input) {
   setup.tool_diameter_mm[1] = 0.2;
   setup.tool_diameter_mm[2] = -0.1;
   setup.initial_position_mm = Eigen::Vector3d(250, 200, 150);
+  static constexpr nc::Dialect kDialects[] = {nc::Dialect::kAuto, nc::Dialect::kFanuc,
+                                              nc::Dialect::kLinuxCnc, nc::Dialect::kFanuc};
+  setup.dialect = kDialects[(options >> 4) & 3u];
+  if (options & 64u) {
+    // G28 and G30 positions (machine coordinates, inside the travel).
+    for (int k = 0; k < 3; ++k) {
+      setup.parameters[5161 + k] = std::array<double, 3>{100, 50, 280}[k];
+      setup.parameters[5181 + k] = std::array<double, 3>{400, 350, 250}[k];
+    }
+  }
   std::string out[2], error[2];
   post::PostReport report[2];
   for (int k = 0; k < 2; ++k) {
