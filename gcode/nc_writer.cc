@@ -165,22 +165,29 @@ std::string apply_edit(const Block& b, const BlockEdit& edit) {
 
 void apply_edit(const Block& b, const BlockEdit& edit, std::string& out) {
   // The words the edit touches, in the line's order: removed (-1) or
-  // renumbered (their index in edit.renumber).
-  std::vector<std::pair<int, int>> touched;
-  touched.reserve(edit.remove.size() + edit.renumber.size());
-  for (int idx : edit.remove) touched.emplace_back(idx, -1);
+  // renumbered (their index in edit.renumber); on the stack for the usual
+  // handful (no allocation per line).
+  constexpr std::size_t kOnStack = 16;
+  std::pair<int, int> on_stack[kOnStack];
+  std::vector<std::pair<int, int>> on_heap;
+  const std::size_t most = edit.remove.size() + edit.renumber.size() + 1;
+  if (most > kOnStack) on_heap.resize(most);
+  std::pair<int, int>* const touched = most > kOnStack ? on_heap.data() : on_stack;
+  std::size_t n = 0;
+  for (int idx : edit.remove) touched[n++] = {idx, -1};
   for (std::size_t k = 0; k < edit.renumber.size(); ++k)
-    touched.emplace_back(edit.renumber[k].first, static_cast<int>(k));
+    touched[n++] = {edit.renumber[k].first, static_cast<int>(k)};
   constexpr int kInsertAfter = std::numeric_limits<int>::max();  // after the word's own edit
   if (edit.remove.empty() && edit.insert_after >= 0 && !edit.insert.empty())
-    touched.emplace_back(edit.insert_after, kInsertAfter);
-  std::sort(touched.begin(), touched.end());
+    touched[n++] = {edit.insert_after, kInsertAfter};
+  std::sort(touched, touched + n);
   const std::string& t = b.text;
   const bool spaces = block_uses_spaces(b);
   out.clear();
   size_t pos = 0;
   bool inserted = edit.insert.empty();
-  for (const auto& [idx, renumbered] : touched) {
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto [idx, renumbered] = touched[k];
     const Word& w = b.words[static_cast<size_t>(idx)];
     if (renumbered == kInsertAfter) {
       out.append(t, pos, w.end - pos);

@@ -51,7 +51,12 @@ char* format_fixed_wide(double value, int decimals, std::uint32_t k, char* out);
 /// value is not within 1e-6 of a tie and below 1e9). The product carries at
 /// most one rounding (relative 1.1e-16), far less than the margin, so the
 /// digits equal fmt's correctly rounded ones.
-inline char* format_number_fast(double value, int decimals, char* out) {
+///
+/// With `read`, *read is also set to the value the text reads back as (what
+/// strtod gives for it), without reading it: +-k / 10^decimals, one
+/// correctly rounded division of exact operands, i.e. the double nearest to
+/// the decimal the text is.
+inline char* format_number_fast(double value, int decimals, char* out, double* read = nullptr) {
   static constexpr double kPow10[] = {1, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
   if (decimals < 0 || decimals > 9) return nullptr;
   const double scaled = std::abs(value) * kPow10[decimals];
@@ -60,6 +65,10 @@ inline char* format_number_fast(double value, int decimals, char* out) {
   // call without SSE4.1); below 1e9 + 0.5, so it fits 32 bits.
   const auto k = static_cast<std::uint32_t>(scaled + 0.5);
   if (std::abs(std::abs(scaled - static_cast<double>(k)) - 0.5) < 1e-6) return nullptr;
+  if (read) {
+    const double r = static_cast<double>(k) / kPow10[decimals];
+    *read = value < 0 && k != 0 ? -r : r;
+  }
   if (k == 0) {  // never "-0"
     *out = '0';
     return out + 1;

@@ -1,5 +1,7 @@
 // ProgramPost::plain_line: the shortcut for a line of plain axis words
 // (docs/post.md "Speed"); its output is byte for byte line()'s.
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "gcode/g_codes.h"
@@ -8,6 +10,65 @@
 #include "postproc/three_axis/travel_check.h"
 
 namespace volmap::post {
+namespace {
+
+// A number written with `dec` decimals at w's end (format_number's text),
+// and the program value the controller reads from it (strtod's).
+double append_read_number(CharBuffer& w, double value, int dec) {
+  double read;
+  if (const char* end = nc::format_number_fast(value, dec, w.room(nc::kNumberRoom), &read)) {
+    w.commit(end);
+    return read;
+  }
+  // format_number's general path (large values, near a tie, many decimals)
+  const std::string number = nc::format_number(value, dec);
+  w.append(number);
+  return std::strtod(number.c_str(), nullptr);
+}
+
+// The plain line `text` (its words w) with the fewest changes, byte for
+// byte as minimal_axis_words and apply_edit write it through a Block: the
+// word of each axis in `needed` renumbered in place for command cmd (its
+// letter and the separators kept), the needed axes the line does not name
+// added after its last word in X Y Z order (a space before each when the
+// line spaces its words), every other word as it is. Into out; read_mm[a]:
+// where the controller stands on axis a after it (G90, machine frame), for
+// every axis the line names or needs.
+void write_plain_minimal(std::string_view text, const nc::PlainAxisWords& w, unsigned needed,
+                         const Vector3d& cmd, const Vector3d& origin, double unit, int dec,
+                         CharBuffer& out, double (&read_mm)[3]) {
+  // program value = (machine - origin) / unit, no division in mm (as program_value)
+  const auto program = [&](int a) {
+    return unit == 1.0 ? cmd[a] - origin[a] : (cmd[a] - origin[a]) / unit;
+  };
+  for (int a = 0; a < 3; ++a)
+    if (w.given >> a & 1u) read_mm[a] = origin[a] + w.value[a] * unit;
+  // The words as lex_plain_axis_words read them: a letter, its number up to
+  // a space or the next letter.
+  const char* const begin = text.data();
+  const char* const end = begin + text.size();
+  const char* kept = begin;  // copied up to here
+  for (const char* p = begin; p != end;) {
+    const int a = (*p | 0x20) - 'x';
+    const char* const letter = p++;
+    while (p != end && *p != ' ' && static_cast<unsigned>((*p | 0x20) - 'x') > 2u) ++p;
+    if (needed >> a & 1u) {
+      out.append(std::string_view(kept, static_cast<std::size_t>(letter + 1 - kept)));
+      read_mm[a] = origin[a] + append_read_number(out, program(a), dec) * unit;
+      kept = p;
+    }
+    if (p != end && *p == ' ') ++p;
+  }
+  out.append(std::string_view(kept, static_cast<std::size_t>(end - kept)));
+  for (int a = 0; a < 3; ++a) {
+    if (!(needed >> a & 1u) || (w.given >> a & 1u)) continue;
+    if (w.spaced) out.append(" ");
+    out.append(std::string_view(&(w.lower ? "xyz" : "XYZ")[a], 1));
+    read_mm[a] = origin[a] + append_read_number(out, program(a), dec) * unit;
+  }
+}
+
+}  // namespace
 
 bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* read) {
   const nc::State& st = interp_.state();
@@ -58,15 +119,29 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
     return true;
   }
   if (needed != 7u) {
-    // Some word keeps its text: the fewest changes, through a Block
-    // (first_piece_minimal; seldom with real errors, which move every axis).
-    nc::lex_block_into(text, current_line_, *line_file_, block_);
-    block_.file = line_file_ == &file_ ? nullptr : line_file_;
-    fx_.motion = plain_motion_;
-    fx_.g53 = false;
-    fx_.homed_axes = 0;
-    fx_.has_motion = true;
-    first_piece_minimal(text, block_, fx_, block_style(block_), pieces);
+    // Some word keeps its text (a line of X and Y words whose Z correction
+    // has not moved half an output unit: every line of a circle in the XY
+    // plane): the fewest changes, as first_piece_minimal writes them.
+    double read_mm[3];
+    words_.clear();
+    write_plain_minimal(text, words, needed, pieces[0].command_mm, interp_.work_offset(),
+                        st.unit_mm, decimals(), words_, read_mm);
+    emit(words_.view());
+    if (needed != 0) ++report_.lines_changed;
+    // Where the controller stands: the numbers it reads, and on an axis the
+    // line does not name, where it stood.
+    for (int a = 0; a < 3; ++a)
+      if ((words.given | needed) >> a & 1u) emitted_mm_[a] = read_mm[a];
+    emitted_exact_ = true;
+    if (pieces.size() > 1) {
+      previous_words_.clear();
+      append_axis_words(pieces[0].command_mm, false, words.lower, words.spaced, previous_words_);
+      emit_following_pieces(
+          pieces, false, words.lower, words.spaced, true, [&](size_t k, CharBuffer& w) {
+            w.clear();
+            append_axis_words(pieces[k].command_mm, false, words.lower, words.spaced, w);
+          });
+    }
     return true;
   }
   // Every axis changes: the edited line is the first piece's words alone

@@ -205,8 +205,19 @@ bool ProgramPost::minimal_axis_words(const nc::Block& b, const BlockStyle& style
     const double origin = s.absolute ? (g53 ? 0.0 : interp_.work_offset()[a]) : emitted_mm_[a];
     double value;  // what the controller reads for this axis, program units
     if (block_needs_word(b, style, g53, a, cmd)) {
-      const std::string number = nc::format_number(program_value(a, cmd[a], g53), dec);
-      value = std::strtod(number.c_str(), nullptr);
+      // The number and the value the controller reads from it (strtod's;
+      // format_number_fast gives it without reading the text back).
+      char buf[nc::kNumberRoom];
+      const double v = program_value(a, cmd[a], g53);
+      std::string_view number;
+      std::string general;  // format_number's general path (seldom)
+      if (const char* end = nc::format_number_fast(v, dec, buf, &value)) {
+        number = std::string_view(buf, static_cast<std::size_t>(end - buf));
+      } else {
+        general = nc::format_number(v, dec);
+        value = std::strtod(general.c_str(), nullptr);
+        number = general;
+      }
       if (idx >= 0) {
         e.renumber.emplace_back(idx, number);
       } else {
@@ -301,6 +312,10 @@ void ProgramPost::first_piece_minimal(std::string_view text, const nc::Block& b,
     ++report_.lines_changed;
     emitted_mm_ = reached_mm;
     emitted_exact_ = true;
+  }
+  if (pieces.size() == 1) {
+    emitted_known_ = true;
+    return;
   }
   previous_words_.clear();
   append_axis_words(pieces[0].command_mm, fx.g53, style.lower, style.spaces, previous_words_);

@@ -180,11 +180,18 @@ class ProgramPost {
                                     const Vector3d& start_cmd);
   /// The number of initial pieces of an arc: the chord error below tol / 4.
   int arc_initial_pieces(const nc::Motion& m) const;
-  /// The deviation of the actual tip at a piece's start (c0 commanded for
-  /// nominal n0p, directions d), kept while a piece is halved (the halves
-  /// share their start).
+  /// The last point corrected: command solves command + e(command, dir) =
+  /// nominal (to solve_accuracy_mm()).
+  struct LastCorrected {
+    const Corrector* corrector = nullptr;
+    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
+    ApproachDirections dir{};
+  } last_, before_last_;
+  /// The deviation of the actual tip at a straight piece's start (c0 commanded for nominal
+  /// n0p, directions d; kept while a piece is halved), or where it decides nothing a bound
+  /// of it from `start`, the last point corrected before the piece (`chord`: its bound).
   double start_deviation(const Corrector& c, const Vector3d& c0, const Vector3d& n0p,
-                         const ApproachDirections& d);
+                         const ApproachDirections& d, const LastCorrected& start, double chord);
   /// PostOptions::keep_arcs: writes the arc block `b` (its effect fx) as
   /// the corrected arc, cut only where the field needs it, when that keeps
   /// the tolerance, and returns true; false (nothing written, nothing
@@ -470,13 +477,6 @@ class ProgramPost {
     return edit_;
   }
   std::string edited_;  ///< the edited line (storage reused)
-  /// The last point corrected: command solves command + e(command, dir) =
-  /// nominal (to solve_accuracy_mm()).
-  struct LastCorrected {
-    const Corrector* corrector = nullptr;
-    Vector3d nominal = Vector3d::Zero(), command = Vector3d::Zero();
-    ApproachDirections dir{};
-  } last_, before_last_;
   /// The deviation of the actual tip at a piece's start (kept while a piece
   /// is halved: the halves share their start).
   struct StartDeviation {

@@ -33,10 +33,30 @@ int ProgramPost::arc_initial_pieces(const nc::Motion& m) const {
 }
 
 double ProgramPost::start_deviation(const Corrector& c, const Vector3d& c0, const Vector3d& n0p,
-                                    const ApproachDirections& d) {
+                                    const ApproachDirections& d, const LastCorrected& start,
+                                    double chord) {
   if (start_dev_.corrector == &c && start_dev_.command == c0 && start_dev_.nominal == n0p &&
       c.same_error(start_dev_.dir, d))
     return start_dev_.deviation;  // the same start, halved again
+  // Where the controller stands near the last point corrected (at the
+  // rounding of its command, or at words kept within half an output unit of
+  // it: a line with the fewest changes), a bound without evaluating e. With
+  // x = start.command, which solves x + e(x) = n = start.nominal to the
+  // residual r (segment()'s kResidual), and e Lipschitz with L in the box:
+  //   |c0 + e(c0) - n0p| <= r + (1 + L) |c0 - x| + |n - n0p|
+  // (plus 1e-11 mm for the rounding of the operations). The bound stands
+  // for the deviation only where it decides nothing: the piece keeps the
+  // tolerance by it, and its predicted deviation, at least the exact one,
+  // does not exceed the largest reported so far, which therefore stays as
+  // it is. The output and the report are the exact evaluation's.
+  const double residual = 2 * solve_accuracy_mm() + 1e-12;
+  if (start.corrector == &c && c.same_error(start.dir, d) && c.in_bound_box(c0) &&
+      c.in_bound_box(start.command)) {
+    const double bound = residual + (1.0 + c.lipschitz_bound()) * (c0 - start.command).norm() +
+                         (start.nominal - n0p).norm() + 1e-11;
+    const double predicted = std::max(bound, residual) + chord;
+    if (predicted <= path_tolerance_mm() && predicted <= report_.max_deviation_mm) return bound;
+  }
   const double dev0 = (c0 + c.error_at(c0, d) - n0p).norm();
   start_dev_ = {&c, n0p, c0, d, dev0};
   return dev0;
@@ -134,12 +154,12 @@ const std::vector<Piece>& ProgramPost::segment(const Corrector& c, const nc::Mot
         // point corrected with the same directions. Only when that bound
         // exceeds the tolerance is the piece sampled at 1/4, 1/2, 3/4.
         const double kResidual = 2 * solve_accuracy_mm() + 1e-12;
-        // The start is the last point corrected with the same directions:
-        // an upper bound without evaluating e; else exact.
-        const bool dev0_exact = !(start_known && c.same_error(start.dir, d));
-        const double dev0 = dev0_exact ? start_deviation(c, p.c0, n0p, d)
-                                       : kResidual + (start.nominal - n0p).norm();
         const double chord = c.chord_deviation_bound(p.c0, c1);
+        // The start is the last point corrected with the same directions:
+        // an upper bound without evaluating e; else start_deviation.
+        const bool dev0_exact = !(start_known && c.same_error(start.dir, d));
+        const double dev0 = dev0_exact ? start_deviation(c, p.c0, n0p, d, start, chord)
+                                       : kResidual + (start.nominal - n0p).norm();
         const double bound = std::max(dev0, kResidual) + chord;
         if (bound <= tol) {
           sample = false;
