@@ -301,7 +301,7 @@ namespace {
 void refuse_motion_free(const std::string& in_name, const FiveAxisPostReport& r) {
   if (r.moves > 0) return;
   throw InputError(
-      in_name, 0,
+      in_name, static_cast<int>(std::max<std::uint64_t>(1, r.lines)),
       (r.lines == 0 ? std::string("the file is empty") : std::to_string(r.lines) + " lines read") +
           "; no block moves the machine, so there is nothing to post: check that "
           "this is the program meant");

@@ -144,7 +144,9 @@ namespace {
     what += fmt::format(", {} of them tape leader before the '%' on line {}", r.leader_lines,
                         r.leader_lines + 1);
   if (r.trailer_lines > 0) what += fmt::format(", {} after the closing '%'", r.trailer_lines);
-  throw InputError(in_name, 0,
+  // (At the '%' that ended a leader, else where the reading ended.)
+  const int at = r.leader_lines > 0 ? r.leader_lines + 1 : static_cast<int>(std::max(1L, lines));
+  throw InputError(in_name, at,
                    what +
                        "; no block moves the machine, so there is nothing to post: check that "
                        "this is the program meant");
