@@ -335,6 +335,22 @@ bool lex_plain_axis_words(std::string_view text, PlainAxisWords& out) {
   unsigned given = 0;
   int count = 0;
   bool spaced = false;
+  // A leading G1 (G01), then one space or none: the motion word of CAM
+  // posts that write it on every line.
+  int g1 = 0;
+  if ((*p | 0x20) == 'g') {
+    const char* q = p + 1;
+    if (q != end && *q == '0') ++q;
+    if (q == end || *q != '1') return false;
+    ++q;
+    if (q != end && *q == ' ') {
+      spaced = true;
+      ++q;
+    }
+    if (q == end) return false;  // G1 alone (or with a trailing space)
+    g1 = static_cast<int>(q - p);
+    p = q;
+  }
   for (;;) {
     // The letter: X Y Z in either case (0x20 is the case bit of ASCII letters).
     const char c = *p;
@@ -377,8 +393,9 @@ bool lex_plain_axis_words(std::string_view text, PlainAxisWords& out) {
   for (int a = 0; a < 3; ++a) out.value[a] = value[a];
   out.given = given;
   out.count = count;
+  out.g1 = static_cast<std::uint8_t>(g1);
   out.lower = lower;
-  out.spaced = spaced || count <= 1;
+  out.spaced = spaced || count + (g1 > 0) <= 1;
   return true;
 }
 

@@ -58,14 +58,19 @@ void lex_block_into(std::string_view text, int line, const std::string& file, Bl
 /// A line of axis words X Y Z only, in the form CAM writes them: each
 /// letter at most once, in either case, its number [sign] digits [. digits]
 /// (at most 15 digits) right after it, words separated by one space or
-/// none, nothing before, between or after them. Most lines of a
-/// three-axis CAM program look like this.
+/// none, nothing before, between or after them; or the same after a G1
+/// (G01, either case) and one space or none, as posts that write the motion
+/// on every line give it. Most lines of a three-axis CAM program look like
+/// this.
 struct PlainAxisWords {
   double value[3] = {};  ///< by axis X Y Z, program units; as lex_block_into reads them
   unsigned given = 0;    ///< bit a: axis a has a word
-  int count = 0;         ///< words
-  bool lower = false;    ///< the first letter is lower case (block_uses_lowercase)
-  bool spaced = false;   ///< a space between two words, or a single word (block_uses_spaces)
+  int count = 0;         ///< axis words
+  /// The bytes of a leading G1 word and the space after it (the axis words
+  /// begin there); 0: none.
+  std::uint8_t g1 = 0;
+  bool lower = false;   ///< the first letter is lower case (block_uses_lowercase)
+  bool spaced = false;  ///< a space between two words, or a single word (block_uses_spaces)
 };
 /// Reads `text` (without its line ending) when it is such a line: true and
 /// `out` set; false otherwise (out unspecified), also for a line

@@ -50,13 +50,18 @@ void Interpreter::set_dialect(Dialect d) {
     }
 }
 
-bool Interpreter::execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion) {
+bool Interpreter::execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion,
+                                      bool g1) {
   // execute()'s short path, less what cannot fail here: no F word, no
   // other letter, the position known, G1 with a feed rate.
   if (s_.ended || s_.motion != kG1Linear || fanuc() || !s_.position_known || s_.comp_side != 0 ||
       s_.comp_exit_pending || (s_.feed <= 0.0 && s_.feed_mode != kG93InverseTime) || given == 0 ||
       given > 7)
     return false;
+  if (g1) {  // the G1 word restates the mode (BlockCheck::general_steps)
+    s_.group01 = kG1Linear;
+    s_.group01_given = true;
+  }
   straight_move(work_offset(), value, given, s_, motion);
   return true;
 }

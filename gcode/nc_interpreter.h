@@ -224,13 +224,15 @@ class Interpreter {
   State check(const Block& b, BlockEffect& effect) const;
   /// A block of axis words only (X Y Z, `value` in program units by axis,
   /// bit a of `given` for each word; the block nc::lex_plain_axis_words
-  /// reads) when it needs none of execute()'s checks: G1 in effect, a feed
-  /// rate set (or G93), every axis position known, the program not ended.
-  /// Then it does what execute() does with that block, sets `motion` (a
-  /// straight move; its other fields are left as they are) and returns
-  /// true; otherwise it changes nothing and returns false (execute() the
-  /// block then). The post-processor's shortcut past a Block.
-  bool execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion);
+  /// reads), after a G1 word when `g1`, when it needs none of execute()'s
+  /// checks: G1 in effect, a feed rate set (or G93), every axis position
+  /// known, the program not ended. Then it does what execute() does with
+  /// that block, sets `motion` (a straight move; its other fields are left
+  /// as they are) and returns true; otherwise it changes nothing and returns
+  /// false (execute() the block then). The post-processor's shortcut past a
+  /// Block.
+  bool execute_linear_axes(const double (&value)[3], unsigned given, Motion& motion,
+                           bool g1 = false);
 
   /// The program's dialect (the reader resolves `auto` before the first
   /// block). Fanuc: G28's reference position is the machine zero

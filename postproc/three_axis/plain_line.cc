@@ -31,9 +31,9 @@ double append_read_number(CharBuffer& w, double value, int dec) {
 // word of each axis in `needed` renumbered in place for command cmd (its
 // letter and the separators kept), the needed axes the line does not name
 // added after its last word in X Y Z order (a space before each when the
-// line spaces its words), every other word as it is. Into out; read_mm[a]:
-// where the controller stands on axis a after it (G90, machine frame), for
-// every axis the line names or needs.
+// line spaces its words), every other word (and a G1) as it is. Into out;
+// read_mm[a]: where the controller stands on axis a after it (G90, machine
+// frame), for every axis the line names or needs.
 void write_plain_minimal(std::string_view text, const nc::PlainAxisWords& w, unsigned needed,
                          const Vector3d& cmd, const Vector3d& origin, double unit, int dec,
                          CharBuffer& out, double (&read_mm)[3]) {
@@ -43,12 +43,12 @@ void write_plain_minimal(std::string_view text, const nc::PlainAxisWords& w, uns
   };
   for (int a = 0; a < 3; ++a)
     if (w.given >> a & 1u) read_mm[a] = origin[a] + w.value[a] * unit;
-  // The words as lex_plain_axis_words read them: a letter, its number up to
-  // a space or the next letter.
+  // The words as lex_plain_axis_words read them, after a G1 word: a
+  // letter, its number up to a space or the next letter.
   const char* const begin = text.data();
   const char* const end = begin + text.size();
   const char* kept = begin;  // copied up to here
-  for (const char* p = begin; p != end;) {
+  for (const char* p = begin + w.g1; p != end;) {
     const int a = (*p | 0x20) - 'x';
     const char* const letter = p++;
     while (p != end && *p != ' ' && static_cast<unsigned>((*p | 0x20) - 'x') > 2u) ++p;
@@ -83,9 +83,17 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
   nc::PlainAxisWords parsed;
   if (!read && !nc::lex_plain_axis_words(text, parsed)) return false;
   const nc::PlainAxisWords& words = read ? *read : parsed;
-  if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_)) return false;
+  if (!interp_.execute_linear_axes(words.value, words.given, plain_motion_, words.g1 != 0))
+    return false;
   ++report_.moves;
   if (self_check_) self_check_->nominal(plain_motion_);
+  if (words.g1) {
+    // What line()'s check_compensation does for a move outside cutter
+    // compensation (a G1 line took that path before it took this one).
+    comp_move_ = false;
+    comp_tangent_in_.setZero();
+    comp_factor_ = 2.0;
+  }
   if (st.position_known)  // as line() checks every motion
     check_travel(machine_, plain_motion_, *last_corrector_, st.origin_mm, *line_file_,
                  current_line_);
@@ -118,10 +126,11 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
     emitted_exact_ = true;
     return true;
   }
-  if (needed != 7u) {
+  if (needed != 7u || words.g1) {
     // Some word keeps its text (a line of X and Y words whose Z correction
     // has not moved half an output unit: every line of a circle in the XY
-    // plane): the fewest changes, as first_piece_minimal writes them.
+    // plane), or the G1 word: the fewest changes, as first_piece_minimal
+    // writes them.
     double read_mm[3];
     words_.clear();
     write_plain_minimal(text, words, needed, pieces[0].command_mm, interp_.work_offset(),

@@ -25,15 +25,6 @@ nc::Motion feed_in(const nc::Motion& h) {
 }
 }  // namespace
 
-std::string_view SelfCheck::plain_words(std::string_view t) const {
-  // "G1 X.. Y.." while G1 is the modal motion is "X.. Y.." (the post writes
-  // a feed move's pieces so): the interpreter's shortcut for it.
-  if (interp_.state().motion != nc::kG1Linear || t.size() < 4) return t;
-  const bool lower = t[0] == 'g';
-  if ((t[0] != 'G' && !lower) || t[1] != '1' || t[2] != ' ') return t;
-  return t.substr(3);
-}
-
 SelfCheck::SelfCheck(const nc::Interpreter& post, const nc::ProgramSetup& setup,
                      const std::string& file, double tolerance_mm)
     : post_(post), interp_(setup, file), tolerance_mm_(tolerance_mm), file_(file) {}
@@ -102,8 +93,8 @@ void SelfCheck::read_line(std::string_view t, const Corrector& c, const std::str
   try {
     // As the reader reads a program: a line of axis words through the
     // interpreter's shortcut, any other as a block.
-    if (nc::lex_plain_axis_words(plain_words(t), plain_) &&
-        interp_.execute_linear_axes(plain_.value, plain_.given, plain_motion_)) {
+    if (nc::lex_plain_axis_words(t, plain_) &&
+        interp_.execute_linear_axes(plain_.value, plain_.given, plain_motion_, plain_.g1 != 0)) {
       m = &plain_motion_;
       m_plain = true;
       named_ |= plain_.given;

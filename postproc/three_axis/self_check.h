@@ -69,8 +69,6 @@ class SelfCheck {
     nc::Motion motion;
     bool valid = false;
   };
-  /// The axis words of a line that is a plain line in effect (or t).
-  std::string_view plain_words(std::string_view t) const;
   void read_line(std::string_view t, const Corrector& c, const std::string& file, int line);
   void feed(const nc::Motion& m, const Corrector& c, const std::string& file, int line);
   /// A straight move checked by its ends and the field's bounds; false:

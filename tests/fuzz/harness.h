@@ -66,10 +66,14 @@ inline void nc_reader(std::string_view program) {
         // The post's shortcut reads a plain line's words as the lexer does.
         nc::PlainAxisWords plain;
         if (nc::lex_plain_axis_words(text, plain)) {
-          require(static_cast<int>(b.words.size()) == plain.count);
-          for (const nc::Word& w : b.words)
+          const std::size_t g1 = plain.g1 ? 1 : 0;  // a leading G1 word
+          require(b.words.size() == static_cast<std::size_t>(plain.count) + g1);
+          if (g1) require(b.words[0].letter == 'G' && b.words[0].code10 == 10);
+          for (std::size_t k = g1; k < b.words.size(); ++k) {
+            const nc::Word& w = b.words[k];
             require(w.letter >= 'X' && w.letter <= 'Z' && (plain.given >> (w.letter - 'X') & 1u) &&
                     std::memcmp(&w.value, &plain.value[w.letter - 'X'], sizeof(double)) == 0);
+          }
         }
         interp.execute(b, fx);
         if (fx.has_motion) {

@@ -145,12 +145,15 @@ TEST(NcBlockFast, NumbersEqualFromChars) {
 }
 
 // A random line of one to four words: mostly axis words in CAM's forms,
-// sometimes with what makes a line not plain (other letters, spaces and
-// tabs where they change the line, comments, numbers with spaces inside or
-// too many digits, a letter twice).
+// sometimes after a G1 (or what looks like one), sometimes with what makes
+// a line not plain (other letters, spaces and tabs where they change the
+// line, comments, numbers with spaces inside or too many digits, a letter
+// twice).
 std::string random_axis_line(std::mt19937_64& rng) {
   auto pick = [&](int n) { return static_cast<int>(rng() % static_cast<unsigned>(n)); };
-  std::string line;
+  static const char* const kPrefixes[] = {"G1 ",  "G01 ",  "g1 ", "G1",  "g01",  "G1  ",
+                                          "G10 ", "G1.0 ", "G2 ", "G0 ", "G001 "};
+  std::string line = pick(3) == 0 ? kPrefixes[pick(11)] : "";
   const int words = 1 + pick(4);
   for (int k = 0; k < words; ++k) {
     if (k > 0) {
@@ -183,7 +186,7 @@ std::string random_axis_line(std::mt19937_64& rng) {
 // the writer keeps.
 TEST(NcBlockFast, PlainAxisWordsAreTheLexersWords) {
   std::mt19937_64 rng(11);
-  int plain = 0, other = 0;
+  int plain = 0, other = 0, with_g1 = 0;
   for (int trial = 0; trial < 200000; ++trial) {
     const std::string line = random_axis_line(rng);
     nc::PlainAxisWords p;
@@ -194,9 +197,17 @@ TEST(NcBlockFast, PlainAxisWordsAreTheLexersWords) {
     ++plain;
     nc::Block b;
     ASSERT_NO_THROW(nc::lex_block_into(line, 1, "t.ngc", b)) << line;
-    ASSERT_EQ(static_cast<int>(b.words.size()), p.count) << line;
+    const std::size_t g1 = p.g1 ? 1 : 0;  // a leading G1 word, then the axis words
+    ASSERT_EQ(b.words.size(), static_cast<std::size_t>(p.count) + g1) << line;
+    if (g1) {
+      ASSERT_EQ(b.words[0].letter, 'G') << line;
+      ASSERT_EQ(b.words[0].code10, 10) << line;
+      ASSERT_EQ(b.words[1].begin, static_cast<std::uint32_t>(p.g1)) << line;
+      ++with_g1;
+    }
     unsigned seen = 0;
-    for (const nc::Word& w : b.words) {
+    for (std::size_t k = g1; k < b.words.size(); ++k) {
+      const nc::Word& w = b.words[k];
       ASSERT_TRUE(w.letter >= 'X' && w.letter <= 'Z') << line;
       const int a = w.letter - 'X';
       ASSERT_FALSE(seen >> a & 1u) << line;
@@ -216,6 +227,7 @@ TEST(NcBlockFast, PlainAxisWordsAreTheLexersWords) {
   // Both kinds were met often.
   EXPECT_GT(plain, 20000);
   EXPECT_GT(other, 20000);
+  EXPECT_GT(with_g1, 5000);
   EXPECT_FALSE(nc::lex_plain_axis_words("", *std::make_unique<nc::PlainAxisWords>()));
 }
 

@@ -309,5 +309,49 @@ TEST(PostShortcut, PlainLinesGiveTheGeneralPathsOutput) {
   }
 }
 
+// Lines the shortcut writes with the fewest changes (a word kept: X and Y
+// change, Z not) and lines after a G1 word (renumbered in place, the G1
+// kept): the general path's output and counts, on a circle of short moves
+// in the forms CAM writes (the circle of bench/nc_programs.sh among them),
+// and with G1 also after cutter compensation has ended.
+TEST(PostShortcut, FewestChangesAndG1LinesGiveTheGeneralPathsOutput) {
+  const char* const forms[] = {"X{0:.4f} Y{1:.4f}",
+                               "G1 X{0:.4f} Y{1:.4f} Z-2",
+                               "G01 X{0:.4f} Y{1:.4f}",
+                               "g1x{0:.4f}y{1:.4f}z-2",
+                               "G1 Y{1:.4f} X{0:.4f}",
+                               "G1X{0:.3f}",
+                               "G1 X{0:.5f} Y{1:.2f} Z-2.00004"};
+  for (const bool comp : {false, true})
+    for (const char* form : forms) {
+      // Compensation ended before the circle: the forms with G1, which the
+      // general path took before the shortcut did.
+      if (comp && form[0] == 'X') continue;
+      std::string p =
+          fmt::format("%\nG21 G90 G17 G94\nG0 X{} Y100 Z10\nG1 Z-2 F800\n", comp ? 120 : 150);
+      // A compensated stretch (X moving one way: its play is not taken up
+      // under compensation) that ends where the circle begins.
+      if (comp) p += "G1 X125\nG41.1 D0.2 X130 Y100\nG1 X140 Y105\nG40 G1 X150 Y100\n";
+      const double step = 2 * M_PI / 1000.5;
+      for (int n = 1; n <= 3000; ++n)
+        p += fmt::format(fmt::runtime(form), 100 + 50 * std::cos(n * step),
+                         100 + 50 * std::sin(n * step)) +
+             "\n";
+      // Long moves that need pieces (the tolerance decides how many).
+      for (int n = 0; n < 20; ++n) p += fmt::format("G1 X{} Y{} Z-2\n", n % 2 ? 20 : 220, 30 + n);
+      p += "G0 Z10\nM2\n%\n";
+      const auto general = post_with(p, hsu(), hsu_errors(), 1.0, false);
+      const auto shortcut = post_with(p, hsu(), hsu_errors(), 1.0, true);
+      ASSERT_EQ(shortcut.first, general.first) << form << " comp " << comp;
+      EXPECT_EQ(shortcut.second.lines_changed, general.second.lines_changed) << form;
+      EXPECT_EQ(shortcut.second.lines_added, general.second.lines_added) << form;
+      EXPECT_EQ(shortcut.second.points_corrected, general.second.points_corrected) << form;
+      EXPECT_EQ(shortcut.second.max_correction_mm, general.second.max_correction_mm) << form;
+      EXPECT_EQ(shortcut.second.max_deviation_mm, general.second.max_deviation_mm) << form;
+      EXPECT_GT(general.second.lines_changed, 2900u) << form;
+      EXPECT_GT(general.second.lines_added, 20u) << form;
+    }
+}
+
 }  // namespace
 }  // namespace volmap
