@@ -1,0 +1,137 @@
+#include "tests/conformance/path_check.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "gcode/nc_path.h"
+
+namespace volmap::conformance {
+
+ErrorField::ErrorField(const Machine& machine, ErrorSet errors)
+    : machine_(machine), errors_(std::move(errors)) {}
+
+const post::Corrector& ErrorField::corrector(double tool_offset_mm) const {
+  const long long key = std::llround(tool_offset_mm * 1e6);
+  auto& c = by_length_[key];
+  if (!c)
+    c = std::make_unique<post::Corrector>(
+        machine_, errors_, machine_.tool_length_mm + tool_offset_mm, OutsidePolicy::kClamp);
+  return *c;
+}
+
+namespace {
+
+constexpr double kSampleMm = 0.5;
+
+// rs274 prints 4 decimals of the program's unit: half a unit on each axis.
+double rounding_um(double unit_mm) { return 0.5e-4 * unit_mm * 1e3 * std::sqrt(3.0); }
+
+bool moves(const CanonMove& m) {
+  return m.motion.kind == nc::MotionKind::kArc || (m.motion.end_mm - m.motion.start_mm).norm() > 0;
+}
+
+int samples(const CanonMove& m) {
+  return std::max(1, static_cast<int>(std::ceil(nc::path_length_mm(m.motion) / kSampleMm)));
+}
+
+// The nearest of a list of moves to p, searched around the cursor first and
+// over the whole list when that finds nothing within 2 um (a path that comes
+// back over itself). dist(i, p): the distance to move i.
+template <typename Dist>
+double nearest(size_t count, size_t& cursor, Dist dist) {
+  double best = 1e300;
+  size_t best_i = cursor;
+  const size_t from = cursor > 3 ? cursor - 3 : 0, to = std::min(count, cursor + 6);
+  for (size_t i = from; i < to; ++i)
+    if (const double d = dist(i); d < best) best = d, best_i = i;
+  if (best > 2e-3)
+    for (size_t i = 0; i < count; ++i)
+      if (const double d = dist(i); d < best) best = d, best_i = i;
+  cursor = best_i;
+  return best;
+}
+
+struct Feed {
+  const CanonMove* move;
+  Eigen::Vector3d h;  // the play state at its end (output moves)
+};
+
+}  // namespace
+
+PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
+                            const std::vector<CanonMove>& output, const ErrorField& field,
+                            double tolerance_um) {
+  PathDeviation r;
+  std::vector<const CanonMove*> nominal_feeds;
+  for (const CanonMove& m : nominal)
+    if (m.feed && moves(m)) nominal_feeds.push_back(&m);
+  r.nominal_empty = nominal_feeds.empty();
+  const auto limit = [&](double unit_a, double unit_b) {
+    return 1.25 * tolerance_um + rounding_um(unit_a) + rounding_um(unit_b);
+  };
+  // Actual to nominal: the output's moves, sampled, the play carried along.
+  std::vector<Feed> output_feeds;
+  Eigen::Vector3d h = Eigen::Vector3d::Zero();
+  Eigen::Vector3d prev = output.empty() ? Eigen::Vector3d::Zero() : output.front().motion.start_mm;
+  size_t cursor = 0;
+  const auto measure = [&](const Eigen::Vector3d& p, const CanonMove& m) {
+    const Eigen::Vector3d actual = p + field.corrector(m.tool_offset_mm).error_with_play(p, h);
+    if (nominal_feeds.empty()) return;
+    const double d = nearest(nominal_feeds.size(), cursor, [&](size_t i) {
+      return nc::distance_to_path(nominal_feeds[i]->motion, actual);
+    });
+    const double um = d * 1e3, lim = limit(m.unit_mm, nominal_feeds[cursor]->unit_mm);
+    if (um - lim > r.actual_to_nominal_um - r.actual_limit_um || r.actual_limit_um == 0) {
+      r.actual_to_nominal_um = um;
+      r.actual_limit_um = lim;
+      r.actual_at = p;
+    }
+  };
+  for (size_t k = 0; k < output.size(); ++k) {
+    const CanonMove& m = output[k];
+    const post::Corrector& c = field.corrector(m.tool_offset_mm);
+    if (!m.feed) {
+      c.take_up_play(prev, m.motion.end_mm, h);
+      prev = m.motion.end_mm;
+      const bool cut_start = k + 1 < output.size() && output[k + 1].feed && moves(output[k + 1]);
+      if (cut_start) measure(prev, m);
+      continue;
+    }
+    if (!moves(m)) continue;  // a feed that moves nothing leaves the tool where it stood
+    const int n = samples(m);
+    for (int s = 1; s <= n; ++s) {
+      const Eigen::Vector3d p = nc::point_on(m.motion, static_cast<double>(s) / n);
+      c.take_up_play(prev, p, h);
+      prev = p;
+      measure(p, m);
+    }
+    output_feeds.push_back({&m, h});
+  }
+  r.output_empty = output_feeds.empty();
+  // Nominal to actual: each sample n of the input's feeds, from the output
+  // move that puts the actual tip nearest to it.
+  cursor = 0;
+  for (const CanonMove* m : nominal_feeds) {
+    const int n = samples(*m);
+    for (int s = 0; s <= n && !output_feeds.empty(); ++s) {
+      const Eigen::Vector3d p = nc::point_on(m->motion, static_cast<double>(s) / n);
+      const double d = nearest(output_feeds.size(), cursor, [&](size_t i) {
+        const Feed& f = output_feeds[i];
+        const post::Corrector& c = field.corrector(f.move->tool_offset_mm);
+        const Eigen::Vector3d commanded = p - c.error_with_play(p, f.h);
+        return nc::distance_to_path(f.move->motion, commanded);
+      });
+      const double um = d * 1e3, lim = limit(m->unit_mm, output_feeds[cursor].move->unit_mm);
+      if (um - lim > r.nominal_to_actual_um - r.nominal_limit_um || r.nominal_limit_um == 0) {
+        r.nominal_to_actual_um = um;
+        r.nominal_limit_um = lim;
+        r.nominal_at = p;
+      }
+    }
+  }
+  if (r.actual_limit_um == 0) r.actual_limit_um = limit(1, 1);
+  if (r.nominal_limit_um == 0) r.nominal_limit_um = limit(1, 1);
+  return r;
+}
+
+}  // namespace volmap::conformance
