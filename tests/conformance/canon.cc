@@ -97,7 +97,13 @@ struct ParseState {
             : std::vector<double>{};
     if (has(l, "SET_G5X_OFFSET(") && v.size() >= 4) g5x = Eigen::Vector3d(v[1], v[2], v[3]) * unit;
     if (has(l, "SET_G92_OFFSET(") && v.size() >= 3) g92 = Eigen::Vector3d(v[0], v[1], v[2]) * unit;
-    if (has(l, "USE_TOOL_LENGTH_OFFSET(") && v.size() >= 3) tool_offset = v[2] * unit;
+    if (has(l, "USE_TOOL_LENGTH_OFFSET(") && v.size() >= 3) {
+      // The axes stay where they are: the controlled point (the tip) jumps
+      // by minus the change.
+      const double offset = v[2] * unit;
+      pos.z() -= offset - tool_offset;
+      tool_offset = offset;
+    }
     if ((traverse || feed) && v.size() >= 3) line_to(machine(v[0], v[1], v[2]), feed);
     if (has(l, "ARC_FEED(") && v.size() >= 6) arc(v);
     if (has(l, "RIGID_TAP(") && v.size() >= 3) {  // in to the end point and back

@@ -30,7 +30,9 @@ void cutter_comp_feature(Gen& g) {
   const double y0 = g.uniform(g.lo.y() + e, g.hi.y() - e - wy);
   const double rc = g.uniform(0, 1) < 0.5 ? 0.0 : g.uniform(0.5, std::min(wx, wy) / 3);
   const bool cw = g.chance(0.5);  // cw: the tool on the left (G41) is outside
-  approach(g, x0 + wx / 2 + (cw ? e : -e), y0 - e, g.uniform(g.lo.z(), 0));
+  // The entry turns away from the tool's side into the first side (an
+  // outside corner), from inside the profile's box.
+  approach(g, x0 + wx / 2 + (cw ? e : -e), y0 + e / 2, g.uniform(g.lo.z(), 0));
   const int form = g.integer(0, 3);
   std::vector<std::string> on = {g.code(cw ? "G41" : "G42")};
   if (form == 0) on.push_back(g.code(fmt::format("D{}", tool)));
@@ -60,7 +62,7 @@ void cutter_comp_feature(Gen& g) {
   g.move(1, x0 + wx / 2, y0, std::nullopt);
   g.emit(g.code("G40"));
   g.comp = false;
-  g.move(1, x0 + wx / 2 + (cw ? -e : e), y0 - e, std::nullopt);  // the exit
+  g.move(1, x0 + wx / 2 + (cw ? -e : e), y0 + e / 2, std::nullopt);  // the exit
   g.retract();
 }
 

@@ -61,6 +61,13 @@ bool names_file_line(const std::string& err) {
 
 std::string first_line(const std::string& s) { return s.substr(0, s.find('\n')); }
 
+// rs274's message and the line it names: "MESSAGE at `LINE`".
+std::string rs274_said(const std::string& error) {
+  const size_t nl = error.find('\n');
+  if (nl == std::string::npos) return error;
+  return error.substr(0, nl) + " at `" + first_line(error.substr(nl + 1)) + "`";
+}
+
 // A volmap message with its numbers as '#' and its file name dropped.
 std::string refusal_key(const std::string& err) {
   std::string l = first_line(err);
@@ -197,7 +204,7 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
     }
     if (!j.rs274_reads) {
       fail("volmap posts a program rs274 refuses: " + normalized_message(in.error),
-           "rs274: " + first_line(in.error) + "; volmap: " + first_line(r.err));
+           "rs274: " + rs274_said(in.error) + "; volmap exits 0");
       continue;
     }
     ++j.posted;
@@ -225,8 +232,7 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
     }
     if (!after.ok && after.error.find(kNoEnd) == std::string::npos) {
       fail("rs274 refuses volmap's output: " + normalized_message(after.error),
-           "rs274: " + first_line(after.error) + " at `" +
-               after.error.substr(std::min(after.error.size(), after.error.find('\n') + 1)) + "`");
+           "rs274: " + rs274_said(after.error));
       continue;
     }
     const ErrorField ef(machine, load_errors_csv(csv));
@@ -234,11 +240,11 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
     j.worst_um = std::max({j.worst_um, d.actual_to_nominal_um, d.nominal_to_actual_um});
     const Eigen::Vector3d a = d.actual_at - kWorkOffsetMm, b = d.nominal_at - kWorkOffsetMm;
     if (d.actual_fails())
-      fail("the actual path leaves the nominal path",
+      fail("the actual path leaves the nominal path at " + d.actual_where,
            fmt::format("{:.2f} um (limit {:.2f}) at X{:.4f} Y{:.4f} Z{:.4f} (mm, G54)",
                        d.actual_to_nominal_um, d.actual_limit_um, a.x(), a.y(), a.z()));
     if (d.nominal_fails())
-      fail("the nominal path is not followed",
+      fail("the nominal path is not followed on " + d.nominal_where,
            fmt::format("{:.2f} um (limit {:.2f}) at X{:.4f} Y{:.4f} Z{:.4f} (mm, G54)",
                        d.nominal_to_actual_um, d.nominal_limit_um, b.x(), b.y(), b.z()));
   }

@@ -74,7 +74,7 @@ PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
   Eigen::Vector3d h = Eigen::Vector3d::Zero();
   Eigen::Vector3d prev = output.empty() ? Eigen::Vector3d::Zero() : output.front().motion.start_mm;
   size_t cursor = 0;
-  const auto measure = [&](const Eigen::Vector3d& p, const CanonMove& m) {
+  const auto measure = [&](const Eigen::Vector3d& p, const CanonMove& m, const char* where) {
     const Eigen::Vector3d actual = p + field.corrector(m.tool_offset_mm).error_with_play(p, h);
     if (nominal_feeds.empty()) return;
     const double d = nearest(nominal_feeds.size(), cursor, [&](size_t i) {
@@ -85,16 +85,22 @@ PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
       r.actual_to_nominal_um = um;
       r.actual_limit_um = lim;
       r.actual_at = p;
+      r.actual_where = where;
     }
   };
   for (size_t k = 0; k < output.size(); ++k) {
     const CanonMove& m = output[k];
     const post::Corrector& c = field.corrector(m.tool_offset_mm);
+    // A change of tool length offset moves the controlled point, not the
+    // axes: no play is taken up by the jump.
+    prev = m.motion.start_mm;
     if (!m.feed) {
       c.take_up_play(prev, m.motion.end_mm, h);
       prev = m.motion.end_mm;
-      const bool cut_start = k + 1 < output.size() && output[k + 1].feed && moves(output[k + 1]);
-      if (cut_start) measure(prev, m);
+      // A cut start: where the feed that follows starts (after a jump of
+      // the controlled point, if its tool's offset changed in between).
+      if (k + 1 < output.size() && output[k + 1].feed && moves(output[k + 1]))
+        measure(output[k + 1].motion.start_mm, output[k + 1], "a cut start");
       continue;
     }
     if (!moves(m)) continue;  // a feed that moves nothing leaves the tool where it stood
@@ -103,7 +109,7 @@ PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
       const Eigen::Vector3d p = nc::point_on(m.motion, static_cast<double>(s) / n);
       c.take_up_play(prev, p, h);
       prev = p;
-      measure(p, m);
+      measure(p, m, m.motion.kind == nc::MotionKind::kArc ? "an arc" : "a line");
     }
     output_feeds.push_back({&m, h});
   }
@@ -126,6 +132,7 @@ PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
         r.nominal_to_actual_um = um;
         r.nominal_limit_um = lim;
         r.nominal_at = p;
+        r.nominal_where = m->motion.kind == nc::MotionKind::kArc ? "an arc" : "a line";
       }
     }
   }

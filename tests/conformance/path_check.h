@@ -41,12 +41,14 @@ struct PathDeviation {
   /// readings, at the worst point.
   double actual_limit_um = 0.0, nominal_limit_um = 0.0;
   Eigen::Vector3d actual_at = Eigen::Vector3d::Zero(), nominal_at = Eigen::Vector3d::Zero();
+  /// Where the worst point lies: "a cut start", "a line", "an arc" (of the
+  /// output, or of the input for nominal_where).
+  std::string actual_where, nominal_where;
   bool actual_fails() const { return actual_to_nominal_um > actual_limit_um; }
   bool nominal_fails() const { return nominal_to_actual_um > nominal_limit_um; }
   bool nominal_empty = false, output_empty = false;
 };
 
-/// `wo`: the work offset (mm), to print the points in program coordinates.
 PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
                             const std::vector<CanonMove>& output, const ErrorField& field,
                             double tolerance_um);

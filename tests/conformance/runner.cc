@@ -6,6 +6,8 @@
 //                      [--shrink-per-class N] [--volmap PATH] [--source DIR] [--verbose]
 //   volmap_conformance --replay SEED [--print]    one program: judge it (or print it)
 //   volmap_conformance --regression PATH...       re-run regression files
+//   volmap_conformance --judge FILE.ngc [--field F] [--tolerance-um T]   judge a program of yours
+//                      (its folder's other .ngc files are its subroutine files)
 //
 // Exit status: 0 when every program passed, 1 when some failed, 2 on a
 // usage error.
@@ -19,6 +21,7 @@
 #include <vector>
 
 #include "tests/conformance/engine.h"
+#include "tests/conformance/process.h"
 #include "tests/conformance/regression.h"
 
 namespace fs = std::filesystem;
@@ -54,6 +57,27 @@ int replay(EngineOptions& o, std::uint64_t seed, bool print) {
   return j.failures.empty() ? 0 : 1;
 }
 
+int judge_file(EngineOptions& o, const std::string& path, const std::string& field, double tol) {
+  Program p;
+  p.main = read_file(path);
+  for (const auto& e : fs::directory_iterator(
+           fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path()))
+    if (e.path().extension() == ".ngc" && !fs::equivalent(e.path(), path))
+      p.files.push_back({e.path().filename().string(), read_file(e.path().string())});
+  const std::vector<FieldSpec> fields =
+      field == "all" ? program_fields(1) : std::vector<FieldSpec>{FieldSpec::parse(field)};
+  Judge judge({o.volmap, o.source_dir, (fs::path(o.work_dir) / "judge").string()});
+  const Judgement j = judge.judge(p, "p", fields, tol);
+  std::cout << fmt::format("{}: rs274 {}{}; {} posts judged, worst {:.3f} um; files in {}\n", path,
+                           j.rs274_reads ? "reads it" : "refuses it: ",
+                           j.rs274_reads ? "" : j.rs274_error.substr(0, j.rs274_error.find('\n')),
+                           j.posted, j.worst_um, judge.last_dir());
+  for (const std::string& r : j.refusals) std::cout << "  refused: " << r << "\n";
+  for (const Finding& f : j.failures)
+    std::cout << fmt::format("  FAIL {} [{}]: {}\n", f.kind, f.field, f.detail);
+  return j.failures.empty() ? 0 : 1;
+}
+
 int regressions(EngineOptions& o, const std::vector<std::string>& paths) {
   Judge judge({o.volmap, o.source_dir, (fs::path(o.work_dir) / "regressions").string()});
   int failing = 0;
@@ -81,6 +105,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> regression_args;
   std::uint64_t replay_seed = 0;
   bool do_replay = false, print = false;
+  std::string judge_path, field = "all";
+  double tolerance = 1.0;
   try {
     for (int k = 1; k < argc; ++k) {
       const std::string a = argv[k];
@@ -114,6 +140,12 @@ int main(int argc, char** argv) {
         o.verbose = true;
       else if (a == "--print")
         print = true;
+      else if (a == "--judge")
+        judge_path = next();
+      else if (a == "--field")
+        field = next();
+      else if (a == "--tolerance-um")
+        tolerance = std::stod(next());
       else if (a == "--replay")
         do_replay = true, replay_seed = std::stoull(next());
       else if (a == "--regression") {
@@ -127,6 +159,7 @@ int main(int argc, char** argv) {
     return usage(e.what());
   }
   if (do_replay) return replay(o, replay_seed, print);
+  if (!judge_path.empty()) return judge_file(o, judge_path, field, tolerance);
   if (!regression_args.empty()) return regressions(o, regression_args);
   const EngineReport r = run_engine(o, std::cerr);
   print_report(r, std::cout);

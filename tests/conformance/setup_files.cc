@@ -45,7 +45,8 @@ constexpr std::array<double, 3> kTravel = {500, 400, 300};
 constexpr std::array<char, 3> kAxis = {'X', 'Y', 'Z'};
 
 // A smooth function of the position t in [0, T]: a polynomial of degree 3
-// and a sinusoid of period 150 mm or more, about `amplitude` in size.
+// and a sinusoid of 0.3 to 1.5 periods over the travel (200 mm or more),
+// about `amplitude` in size.
 struct Smooth {
   double c0, c1, c2, c3, a, k, phase;
   Smooth(std::mt19937_64& rng, double amplitude) {
@@ -55,7 +56,7 @@ struct Smooth {
     c2 = 0.6 * amplitude * u(rng);
     c3 = 0.4 * amplitude * u(rng);
     a = 0.3 * amplitude * u(rng);
-    k = std::uniform_real_distribution<double>(0.5, 3.0)(rng);
+    k = std::uniform_real_distribution<double>(0.3, 1.5)(rng);
     phase = std::uniform_real_distribution<double>(0, 2 * M_PI)(rng);
   }
   double operator()(double t, double T) const {
