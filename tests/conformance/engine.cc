@@ -128,10 +128,14 @@ EngineReport run_engine(const EngineOptions& o, std::ostream& log) {
   // Shrink the first failures of each class.
   std::map<std::string, int> shrunk;
   Judge judge({o.volmap, o.source_dir, (fs::path(o.work_dir) / "shrink").string()});
-  for (const Result& r : results)
+  for (const Result& r : results) {
+    std::vector<std::string> done;  // a class once per program (not once per field)
     for (const Finding& f : r.judgement.failures) {
-      if (shrunk[f.kind] >= o.shrink_per_class) continue;
+      if (shrunk[f.kind] >= o.shrink_per_class ||
+          std::find(done.begin(), done.end(), f.kind) != done.end())
+        continue;
       ++shrunk[f.kind];
+      done.push_back(f.kind);
       FailureCase fc;
       fc.finding = f;
       fc.seed = r.seed;
@@ -154,6 +158,7 @@ EngineReport run_engine(const EngineOptions& o, std::ostream& log) {
       if (!o.regressions_dir.empty()) fc.regression_file = write_regression(o.regressions_dir, fc);
       report.failures.push_back(std::move(fc));
     }
+  }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

@@ -235,8 +235,12 @@ void misc_feature(Gen& g) {
       g.emit(g.join({g.code("G94"), g.word('F', g.inch ? 20 : 500, 0)}));
       g.motion = 1;
     }
-    if (k == 11 && g.known) {  // block delete: the switch is off, the line runs
-      g.emit("/" + g.join({g.code("G1"), g.word('Y', (g.w.y() - g.shift.y()) / u), g.feed_word()}));
+    if (k == 11 && g.known && g.chance(0.3)) {  // block delete: the switch is off, it runs
+      const Vec t = g.clamp(g.w + Vec(g.uniform(-10, 10), g.uniform(-10, 10), 0));
+      g.emit("/" + g.join({g.code("G1"), g.word('X', (t.x() - g.shift.x()) / u),
+                           g.word('Y', (t.y() - g.shift.y()) / u), g.feed_word()}));
+      g.w.x() = g.rounded((t.x() - g.shift.x()) / u) * u + g.shift.x();
+      g.w.y() = g.rounded((t.y() - g.shift.y()) / u) * u + g.shift.y();
       g.motion = 1;
     }
   }

@@ -49,8 +49,12 @@ struct PathDeviation {
   bool nominal_empty = false, output_empty = false;
 };
 
+/// `stands_at`: machine positions of the axes where the controller stands
+/// uncorrected whatever the post writes (where rs274 starts, the G28/G30
+/// homes): a feed that starts there is measured at its end only (its start
+/// is off by the error there, which no block of the program moves).
 PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
                             const std::vector<CanonMove>& output, const ErrorField& field,
-                            double tolerance_um);
+                            double tolerance_um, const std::vector<Eigen::Vector3d>& stands_at);
 
 }  // namespace volmap::conformance
