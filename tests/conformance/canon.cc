@@ -43,6 +43,7 @@ struct ParseState {
   Eigen::Vector3d pos = Eigen::Vector3d::Zero();  // machine mm (rs274 starts at machine zero)
   Eigen::Vector3d g5x = Eigen::Vector3d::Zero(), g92 = Eigen::Vector3d::Zero();
   std::vector<CanonMove> moves;
+  std::vector<UserM> user_m;
 
   Eigen::Vector3d machine(double x, double y, double z) const {
     return Eigen::Vector3d(x, y, z) * unit + g5x + g92;
@@ -85,6 +86,11 @@ struct ParseState {
     pos = m.end_mm;
   }
   void line(const std::string& l) {
+    if (const size_t at = l.find("COMMENT(\"user M"); at != std::string::npos) {
+      const size_t from = at + 9, to = l.rfind('"');
+      user_m.push_back({l.substr(from, to > from ? to - from : 0), pos});
+      return;
+    }
     if (has(l, "USE_LENGTH_UNITS(CANON_UNITS_INCHES)")) unit = 25.4;
     if (has(l, "USE_LENGTH_UNITS(CANON_UNITS_MM)")) unit = 1.0;
     if (has(l, "SELECT_PLANE(CANON_PLANE_XY)")) plane = 0;
@@ -116,11 +122,12 @@ struct ParseState {
 
 }  // namespace
 
-std::vector<CanonMove> parse_canon(const std::string& text) {
+void parse_canon(const std::string& text, Canon& into) {
   ParseState s;
   std::istringstream in(text);
   for (std::string l; std::getline(in, l);) s.line(l);
-  return std::move(s.moves);
+  into.moves = std::move(s.moves);
+  into.user_m = std::move(s.user_m);
 }
 
 std::string normalized_message(const std::string& message) {
@@ -177,7 +184,7 @@ Canon run_rs274(const Rs274Setup& setup, const std::string& program) {
   }
   if (c.ok) c.error.clear();
   if (!c.ok && c.error.empty()) c.error = r.timed_out ? "rs274 timed out" : "rs274 failed";
-  c.moves = parse_canon(read_file(canon_file));
+  parse_canon(read_file(canon_file), c);
   fs::remove(canon_file);
   fs::remove(log_file);
   return c;

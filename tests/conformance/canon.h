@@ -21,11 +21,20 @@ struct CanonMove {
   double tool_offset_mm = 0.0;  ///< tool length offset (Z) in effect
 };
 
+/// A user M code rs274 ran on a judge copy (judge.h: its line is the
+/// comment `(user M102 P1 Q2)`, which rs274 prints as it runs it), and where
+/// the controlled point stood (machine mm).
+struct UserM {
+  std::string text;
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+};
+
 struct Canon {
   bool ok = false;         ///< rs274 read the whole program without an error
   bool timed_out = false;  ///< rs274 did not finish (an endless loop)
   std::string error;       ///< rs274's message ("" when ok), and the line it names
   std::vector<CanonMove> moves;
+  std::vector<UserM> user_m;
 };
 
 /// Where rs274 runs: its executable, a HOME of its own, the tool table and
@@ -43,8 +52,8 @@ struct Rs274Setup {
 /// subroutine files) and reads its canonical calls.
 Canon run_rs274(const Rs274Setup& setup, const std::string& program);
 
-/// Reads canonical calls (rs274 -g output) into moves; exposed for tests.
-std::vector<CanonMove> parse_canon(const std::string& text);
+/// Reads canonical calls (rs274 -g output) into moves and user M codes.
+void parse_canon(const std::string& text, Canon& into);
 
 /// rs274's error message with its numbers replaced by '#' (a class key).
 std::string normalized_message(const std::string& message);

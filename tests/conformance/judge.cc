@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <regex>
 #include <sstream>
@@ -18,7 +20,7 @@ namespace fs = std::filesystem;
 
 std::string without_user_m(const std::string& text) {
   static const std::regex user_m(
-      R"(^\s*(/\s*)?([Nn]\s*\d+\s*)?[Mm]\s*1\s*\d\s*\d(\s*[PpQq]\s*[-+]?[\d.]+)*\s*$)");
+      R"(^\s*(/\s*)?([Nn]\s*\d+\s*)?[Mm]\s*(1\s*\d\s*\d)((\s*[PpQq]\s*[-+]?[\d.]+)*)\s*$)");
   std::string out;
   size_t at = 0;
   while (at < text.size()) {
@@ -38,7 +40,20 @@ std::string without_user_m(const std::string& text) {
       if (depth == 0) code += c;
       if (c == ')' && depth > 0) --depth;
     }
-    out += std::regex_match(code, user_m) ? "(user M code)" + ending : line + ending;
+    // In its place a comment rs274 prints as it runs it: `(user M102 P1 Q2)`.
+    std::smatch m;
+    if (std::regex_match(code, m, user_m)) {
+      std::string words = "M" + m[3].str() + m[4].str();
+      words.erase(std::remove_if(words.begin(), words.end(), ::isspace), words.end());
+      std::string spaced;
+      for (char c : words) {
+        const char u = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+        if ((u == 'P' || u == 'Q') && !spaced.empty()) spaced += ' ';
+        spaced += u;
+      }
+      line = "(user " + spaced + ")";
+    }
+    out += line + ending;
     at = end;
   }
   return out;
@@ -101,6 +116,25 @@ void write_judge_copy(const fs::path& dir, const Program& p, bool strip_user_m) 
     write_file((dir / name).string(), judge_copy(bytes, strip_user_m));
 }
 
+// Whether the output runs the same user M codes in the same order where the
+// input runs them (within 0.05 mm: the corrections are micrometres): "" or
+// what differs.
+std::string user_m_moved(const Canon& in, const Canon& out) {
+  for (size_t k = 0; k < std::max(in.user_m.size(), out.user_m.size()); ++k) {
+    if (k >= in.user_m.size() || k >= out.user_m.size())
+      return fmt::format("the input runs {} user M codes, the output {}", in.user_m.size(),
+                         out.user_m.size());
+    const UserM &a = in.user_m[k], &b = out.user_m[k];
+    const Eigen::Vector3d d = b.at - a.at;
+    if (a.text != b.text || d.norm() > 0.05)
+      return fmt::format("user M code {}: {} at X{:.4f} Y{:.4f} Z{:.4f} in, {} at X{:.4f} Y{:.4f} "
+                         "Z{:.4f} out (mm, machine)",
+                         k + 1, a.text, a.at.x(), a.at.y(), a.at.z(), b.text, b.at.x(), b.at.y(),
+                         b.at.z());
+  }
+  return "";
+}
+
 }  // namespace
 
 Judge::Judge(JudgeConfig config) : config_(std::move(config)) {
@@ -111,7 +145,7 @@ Judge::Judge(JudgeConfig config) : config_(std::move(config)) {
 bool Judge::reproduces(const Program& program, const Finding& finding, double tolerance_um) {
   const Judgement j = judge(program, "shrink", {FieldSpec::parse(finding.field)}, tolerance_um);
   for (const Finding& f : j.failures)
-    if (f.kind == finding.kind) return true;
+    if (f.kind == finding.kind && f.excess_um >= finding.excess_um / 2) return true;
   return false;
 }
 
@@ -177,8 +211,9 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
     post.timeout_s = config_.timeout_s;
     const ProcessResult r = run_process(post);
     const std::string name = field.name();
-    const auto fail = [&](const std::string& kind, const std::string& detail) {
-      j.failures.push_back({kind, detail, name});
+    const auto fail = [&](const std::string& kind, const std::string& detail,
+                          double excess_um = 0) {
+      j.failures.push_back({kind, detail, name, excess_um});
     };
     if (r.timed_out) {
       fail("volmap post timed out", fmt::format("after {} s", config_.timeout_s));
@@ -235,6 +270,8 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
            "rs274: " + rs274_said(after.error));
       continue;
     }
+    if (const std::string moved = user_m_moved(in, after); !moved.empty())
+      fail("volmap's output runs the user M codes elsewhere", moved);
     const ErrorField ef(machine, load_errors_csv(csv));
     const PathDeviation d = compare_paths(in.moves, after.moves, ef, tolerance_um,
                                           {Eigen::Vector3d::Zero(), kG28HomeMm, kG30HomeMm});
@@ -247,15 +284,17 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
     if (d.actual_fails())
       fail("the actual path leaves the nominal path at " + d.actual_where + as_read,
            fmt::format("{:.2f} um (limit {:.2f}) at X{:.4f} Y{:.4f} Z{:.4f} (mm, G54)",
-                       d.actual_to_nominal_um, d.actual_limit_um, a.x(), a.y(), a.z()));
+                       d.actual_to_nominal_um, d.actual_limit_um, a.x(), a.y(), a.z()),
+           d.actual_to_nominal_um - d.actual_limit_um);
     if (d.nominal_fails())
       fail("the nominal path is not followed on " + d.nominal_where + as_read,
            fmt::format("{:.2f} um (limit {:.2f}) at X{:.4f} Y{:.4f} Z{:.4f} (mm, G54)",
-                       d.nominal_to_actual_um, d.nominal_limit_um, b.x(), b.y(), b.z()));
+                       d.nominal_to_actual_um, d.nominal_limit_um, b.x(), b.y(), b.z()),
+           d.nominal_to_actual_um - d.nominal_limit_um);
   }
   if (posted_with_errors)
     for (const std::string& z : zero_refusals)
-      j.failures.push_back({"zero errors: refused what the errors posted", z, "zero"});
+      j.failures.push_back({"zero errors: refused what the errors posted", z, "zero", 0});
   return j;
 }
 

@@ -34,6 +34,9 @@ struct Finding {
   std::string kind;
   std::string detail;
   std::string field;
+  /// A deviation's excess over its limit (um); the shrinker keeps at least
+  /// half of it, so that a minimal program fails clearly.
+  double excess_um = 0;
 };
 
 struct Judgement {

@@ -24,7 +24,7 @@ std::string slug(const std::string& kind) {
       s += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     else if (!s.empty() && s.back() != '-')
       s += '-';
-    if (s.size() >= 48) break;
+    if (s.size() >= 90) break;
   }
   while (!s.empty() && s.back() == '-') s.pop_back();
   return s;
