@@ -127,10 +127,10 @@ std::string user_m_moved(const Canon& in, const Canon& out) {
     const UserM &a = in.user_m[k], &b = out.user_m[k];
     const Eigen::Vector3d d = b.at - a.at;
     if (a.text != b.text || d.norm() > 0.05)
-      return fmt::format("user M code {}: {} at X{:.4f} Y{:.4f} Z{:.4f} in, {} at X{:.4f} Y{:.4f} "
-                         "Z{:.4f} out (mm, machine)",
-                         k + 1, a.text, a.at.x(), a.at.y(), a.at.z(), b.text, b.at.x(), b.at.y(),
-                         b.at.z());
+      return fmt::format(
+          "user M code {}: {} at X{:.4f} Y{:.4f} Z{:.4f} in, {} at X{:.4f} Y{:.4f} "
+          "Z{:.4f} out (mm, machine)",
+          k + 1, a.text, a.at.x(), a.at.y(), a.at.z(), b.text, b.at.x(), b.at.y(), b.at.z());
   }
   return "";
 }

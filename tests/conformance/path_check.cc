@@ -65,8 +65,53 @@ double nearest(size_t count, size_t& cursor, Dist dist) {
 
 struct Feed {
   const CanonMove* move;
-  Eigen::Vector3d h;  // the play state at its end (output moves)
+  std::vector<Eigen::Vector3d> h;  // the play state at its samples (0: its start, .., n: its end)
 };
+
+// The parameter in [0, 1] of the point of the motion nearest to p, and the
+// distance (mm).
+std::pair<double, double> nearest_on(const nc::Motion& m, const Eigen::Vector3d& p) {
+  if (m.kind != nc::MotionKind::kArc) {
+    const Eigen::Vector3d d = m.end_mm - m.start_mm;
+    const double len2 = d.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((p - m.start_mm).dot(d) / len2, 0.0, 1.0) : 0.0;
+    return {t, (m.start_mm + t * d - p).norm()};
+  }
+  const nc::ArcGeometry g = nc::arc_geometry(m);
+  std::pair<double, double> best = {0.0, (p - m.start_mm).norm()};
+  if (const double e = (p - m.end_mm).norm(); e < best.second) best = {1.0, e};
+  const double ang = std::atan2(p[g.a1] - m.center_mm[g.a1], p[g.a0] - m.center_mm[g.a0]);
+  double rel = std::fmod((g.sweep >= 0 ? 1.0 : -1.0) * (ang - g.start_angle), 2 * M_PI);
+  if (rel < 0) rel += 2 * M_PI;
+  for (double a = rel; a <= std::abs(g.sweep) + 1e-12; a += 2 * M_PI) {
+    const double s = std::clamp(a / std::abs(g.sweep), 0.0, 1.0);
+    if (const double d = (nc::point_on(m, s) - p).norm(); d < best.second) best = {s, d};
+  }
+  return best;
+}
+
+// The play state where the command has gone from the start of the move to
+// its parameter s (the backlash operator along the move, in 32 steps).
+Eigen::Vector3d play_at(const Feed& f, const post::Corrector& c, double s) {
+  Eigen::Vector3d h = f.h.front(), prev = f.move->motion.start_mm;
+  for (int k = 1; k <= 32; ++k) {
+    const Eigen::Vector3d q = nc::point_on(f.move->motion, s * k / 32);
+    c.take_up_play(prev, q, h);
+    prev = q;
+  }
+  return h;
+}
+
+// The distance from the nominal point p to the actual path of an output
+// move: the commanded point the error moves to p (p - e(p), with the play
+// state where the command passes it) from the commanded move.
+double to_actual(const Feed& f, const Eigen::Vector3d& p, const ErrorField& field) {
+  const post::Corrector& c = field.corrector(f.move->tool_offset_mm);
+  const auto [s, d] = nearest_on(f.move->motion, p - c.error_with_play(p, f.h.back()));
+  if (f.h.front() == f.h.back()) return d;  // no play taken up along it
+  const double s1 = nearest_on(f.move->motion, p - c.error_with_play(p, play_at(f, c, s))).first;
+  return nearest_on(f.move->motion, p - c.error_with_play(p, play_at(f, c, s1))).second;
+}
 
 }  // namespace
 
@@ -138,12 +183,16 @@ PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
       continue;
     }
     const int n = moves(m) ? samples(m) : 0;
-    for (int s = starts_uncorrected(m, stands_at) ? n : std::min(n, 1); s <= n; ++s) {
+    Feed f{&m, {play.h}};
+    const bool skip = starts_uncorrected(m, stands_at);
+    for (int s = 1; s <= std::max(n, 1); ++s) {
       const Eigen::Vector3d p = nc::point_on(m.motion, n == 0 ? 1.0 : static_cast<double>(s) / n);
       play.to(c, p);
-      measure(p, m, kind_of(m));
+      f.h.push_back(play.h);
+      if (!skip || s == n) measure(p, m, kind_of(m));
     }
-    output_feeds.push_back({&m, play.h});
+    if (n == 0) f.h.pop_back();
+    output_feeds.push_back(std::move(f));
   }
   r.output_empty = output_feeds.empty();
   // Nominal to actual: each sample n of the input's feeds, from the output
@@ -153,12 +202,8 @@ PathDeviation compare_paths(const std::vector<CanonMove>& nominal,
     const int n = samples(*m);
     for (int s = starts_uncorrected(*m, stands_at) ? n : 0; s <= n && !output_feeds.empty(); ++s) {
       const Eigen::Vector3d p = nc::point_on(m->motion, static_cast<double>(s) / n);
-      const double d = nearest(output_feeds.size(), cursor, [&](size_t i) {
-        const Feed& f = output_feeds[i];
-        const post::Corrector& c = field.corrector(f.move->tool_offset_mm);
-        const Eigen::Vector3d commanded = p - c.error_with_play(p, f.h);
-        return nc::distance_to_path(f.move->motion, commanded);
-      });
+      const double d = nearest(output_feeds.size(), cursor,
+                               [&](size_t i) { return to_actual(output_feeds[i], p, field); });
       const double um = d * 1e3, lim = limit(m->unit_mm, output_feeds[cursor].move->unit_mm);
       if (std::getenv("CONFORMANCE_DEBUG") && um > lim) {
         const CanonMove& o = *output_feeds[cursor].move;
