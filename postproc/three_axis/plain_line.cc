@@ -87,13 +87,12 @@ bool ProgramPost::plain_line(std::string_view text, const nc::PlainAxisWords* re
     return false;
   ++report_.moves;
   if (self_check_) self_check_->nominal(plain_motion_);
-  if (words.g1) {
-    // What line()'s check_compensation does for a move outside cutter
-    // compensation (a G1 line took that path before it took this one).
-    comp_move_ = false;
-    comp_tangent_in_.setZero();
-    comp_factor_ = 2.0;
-  }
+  // What line()'s check_compensation does for a move outside cutter
+  // compensation (the shortcut runs only there): after a G40 exit, the
+  // lines that follow are no compensated moves.
+  comp_move_ = false;
+  comp_tangent_in_.setZero();
+  comp_factor_ = 2.0;
   if (st.position_known)  // as line() checks every motion
     check_travel(machine_, plain_motion_, *last_corrector_, st.origin_mm, *line_file_,
                  current_line_);

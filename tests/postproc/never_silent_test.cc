@@ -211,5 +211,18 @@ TEST(NeverSilent, G91PolarIncrementsAreTakenFromWhereTheControllerStands) {
   expect_polar_program_within_tolerance(one, "polar-angle-only", 1.0 + 0.06);
 }
 
+// Found by the speed work: after a G40 exit move, a plain line took the
+// shortcut with the "compensated move" state left on, and was refused as
+// under cutter compensation; the same line with G1 in front posted.
+TEST(NeverSilent, APlainLineAfterG40IsNoCompensatedMove) {
+  const std::string p =
+      "%\nG21 G90 G17 G94\nG0 X20 Y0 Z110\nG1 Z98 F800\nG1 X25\nG41.1 D0.2 X30 Y0\n"
+      "G1 X40 Y5\nG40 G1 X50 Y0\nX49.99 Y0.3\nM2\n%\n";
+  EXPECT_EQ(refusal(p), "");
+  std::string g1 = p;
+  g1.replace(g1.find("X49.99"), 0, "G1 ");
+  EXPECT_EQ(refusal(g1), "");
+}
+
 }  // namespace
 }  // namespace volmap
