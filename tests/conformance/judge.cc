@@ -149,6 +149,46 @@ bool Judge::reproduces(const Program& program, const Finding& finding, double to
   return false;
 }
 
+// Where output `out` first differs from input `in` ("": nowhere).
+std::string first_difference(const std::string& in, const std::string& out) {
+  if (out == in) return "";
+  size_t at = 0, line = 1;
+  while (at < out.size() && at < in.size() && out[at] == in[at]) line += in[at++] == '\n';
+  return fmt::format("first difference at line {} ({} bytes in, {} out)", line, in.size(),
+                     out.size());
+}
+
+ProcessSpec Judge::post_spec(const fs::path& dir, const SetupFiles& setup, const std::string& csv,
+                             const std::string& out_name, double tolerance_um, size_t k) const {
+  ProcessSpec post;
+  post.argv = {config_.volmap,
+               "post",
+               "--machine",
+               (fs::path(config_.source_dir) / kMachine).string(),
+               "--errors",
+               csv,
+               "--work-offset",
+               fmt::format("{},{},{}", kWorkOffsetMm.x(), kWorkOffsetMm.y(), kWorkOffsetMm.z()),
+               "--initial-position",
+               fmt::format("{},{},{}", -kWorkOffsetMm.x(), -kWorkOffsetMm.y(), -kWorkOffsetMm.z()),
+               "--var-file",
+               setup.volmap_var,
+               "--tool-table",
+               setup.volmap_tools,
+               "--subroutine-path",
+               dir.string(),
+               "--clamp",
+               "--tolerance-um",
+               fmt::format("{}", tolerance_um),
+               kProgramName,
+               "-o",
+               out_name};
+  post.cwd = dir.string();
+  post.err_file = (dir / fmt::format("post{}.err", k)).string();
+  post.timeout_s = config_.timeout_s;
+  return post;
+}
+
 Judgement Judge::judge(const Program& program, const std::string& tag,
                        const std::vector<FieldSpec>& fields, double tolerance_um) {
   const fs::path dir = fs::path(config_.work_dir) / tag;
@@ -182,33 +222,7 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
     const std::string csv = (dir / fmt::format("e{}.csv", k)).string();
     write_file(csv, error_csv(field));
     const std::string out_name = fmt::format("out{}.ngc", k);
-    ProcessSpec post;
-    post.argv = {
-        config_.volmap,
-        "post",
-        "--machine",
-        (fs::path(config_.source_dir) / kMachine).string(),
-        "--errors",
-        csv,
-        "--work-offset",
-        fmt::format("{},{},{}", kWorkOffsetMm.x(), kWorkOffsetMm.y(), kWorkOffsetMm.z()),
-        "--initial-position",
-        fmt::format("{},{},{}", -kWorkOffsetMm.x(), -kWorkOffsetMm.y(), -kWorkOffsetMm.z()),
-        "--var-file",
-        setup.volmap_var,
-        "--tool-table",
-        setup.volmap_tools,
-        "--subroutine-path",
-        dir.string(),
-        "--clamp",
-        "--tolerance-um",
-        fmt::format("{}", tolerance_um),
-        kProgramName,
-        "-o",
-        out_name};
-    post.cwd = dir.string();
-    post.err_file = (dir / fmt::format("post{}.err", k)).string();
-    post.timeout_s = config_.timeout_s;
+    const ProcessSpec post = post_spec(dir, setup, csv, out_name, tolerance_um, k);
     const ProcessResult r = run_process(post);
     const std::string name = field.name();
     const auto fail = [&](const std::string& kind, const std::string& detail,
@@ -245,15 +259,8 @@ Judgement Judge::judge(const Program& program, const std::string& tag,
     ++j.posted;
     const std::string out_path = (dir / out_name).string();
     if (field.kind == FieldSpec::kZero) {
-      const std::string out = read_file(out_path), bytes = program.main;
-      if (out != bytes) {
-        size_t at = 0, line = 1;
-        while (at < out.size() && at < bytes.size() && out[at] == bytes[at])
-          line += bytes[at++] == '\n';
-        fail("zero errors: the output differs from the input",
-             fmt::format("first difference at line {} ({} bytes in, {} out)", line, bytes.size(),
-                         out.size()));
-      }
+      if (const std::string d = first_difference(program.main, read_file(out_path)); !d.empty())
+        fail("zero errors: the output differs from the input", d);
       continue;
     }
     posted_with_errors = true;

@@ -13,10 +13,12 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "tests/conformance/generator.h"
+#include "tests/conformance/process.h"
 #include "tests/conformance/setup_files.h"
 
 namespace volmap::conformance {
@@ -62,6 +64,10 @@ class Judge {
   const std::string& last_dir() const { return last_dir_; }
 
  private:
+  /// The `volmap post` run of field k's errors file `csv` into `out_name`.
+  ProcessSpec post_spec(const std::filesystem::path& dir, const SetupFiles& setup,
+                        const std::string& csv, const std::string& out_name, double tolerance_um,
+                        size_t k) const;
   JudgeConfig config_;
   std::string last_dir_;
 };
