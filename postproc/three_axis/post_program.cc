@@ -162,6 +162,7 @@ PostReport run_post(std::istream& in, const std::string& in_name, std::ostream& 
     Corrector check(machine, *table, options.outside);  // a wrong table fails before any output
   ProgramPost post(in_name, out, machine, errors, setup, options, table);
   nc::ProgramReader reader(in, in_name, post.interpreter(), options.subroutine_path);
+  reader.set_max_executed_lines(options.max_executed_lines);
   nc::ProgramLine l;
   bool reading = true;  // in the reader (the line after l), else posting l
   try {

@@ -68,6 +68,9 @@ struct PostOptions {
   /// machine before they are committed (self_check.h); a point beyond the
   /// tolerance is a refusal (InputError) at the line it was written for.
   bool self_check = true;
+  /// The flattener's endless-loop guard (flatten::kMaxExecutedLines; the
+  /// fuzz targets take fewer).
+  long max_executed_lines = nc::flatten::kMaxExecutedLines;
 };
 
 struct PostReport {

@@ -174,6 +174,7 @@ inline void post(std::string_view input) {
   post::PostReport report[2];
   for (int k = 0; k < 2; ++k) {
     post::PostOptions o;
+    o.max_executed_lines = 20000;  // an endless loop refused, not waited for
     o.keep_arcs = options & 1u;
     o.expand_cycles = options & 2u;
     o.tolerance_mm = (options & 4u) ? 5e-3 : 1e-3;
